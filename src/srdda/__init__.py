@@ -1,0 +1,26 @@
+"""srdda: Discontinuous Deformation Analysis with the strain-rotation decomposition.
+
+The three methods of Fan, Zheng & Zhao (2017): Shi's DDA (``dda0``), DDA with
+post-adjusted rotations (``dda1``) and SRDDA (``srdda``). SI units throughout.
+
+>>> import srdda
+>>> m = srdda.Model(gravity=(0.0, -9.81))
+>>> _ = m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
+>>> b = m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+>>> res = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=10))
+>>> res.completed
+True
+"""
+from .geometry import PolygonError, block_moments
+from .integrators import METHODS, Method, TimeScheme, method_preset
+from .model import Load, Material, Model, ModelError
+from .simulation import DivergenceError, Result, RunSettings, State, run
+from .solvers import available_solvers, get_solver
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "METHODS", "DivergenceError", "Load", "Material", "Method", "Model", "ModelError", "PolygonError",
+    "Result", "RunSettings", "State", "TimeScheme", "available_solvers", "block_moments", "get_solver",
+    "method_preset", "run", "__version__",
+]

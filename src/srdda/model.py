@@ -1,0 +1,358 @@
+"""The model: blocks, materials, loads, supports and measured points.
+
+A :class:`Model` is built with ``add_*`` methods (or read from a model file by
+:mod:`srdda.io`) and compiled by :meth:`Model.arrays` into flat numpy arrays
+that the time loop uses. Units are SI: m, kg, s, N, Pa.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import shapely
+
+from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon
+
+__all__ = ["JointMaterial", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
+
+
+class ModelError(ValueError):
+    """The model is inconsistent (the message names the item and the problem)."""
+
+
+@dataclass(frozen=True)
+class Material:
+    """Block material. ``density`` kg/m³, ``young`` Pa, ``poisson`` (-), 2D idealisation."""
+
+    density: float
+    young: float
+    poisson: float
+    plane: Literal["stress", "strain"] = "stress"
+
+    def __post_init__(self) -> None:
+        if not self.density >= 0:
+            raise ModelError(f"material density must be >= 0, got {self.density}")
+        if not self.young > 0:
+            raise ModelError(f"material young must be > 0, got {self.young}")
+        upper = 0.5 if self.plane == "stress" else 0.5
+        if not -1.0 < self.poisson < upper:
+            raise ModelError(f"material poisson must lie in (-1, 0.5), got {self.poisson}")
+        if self.plane not in ("stress", "strain"):
+            raise ModelError(f"material plane must be 'stress' or 'strain', got {self.plane!r}")
+
+
+@dataclass(frozen=True)
+class JointMaterial:
+    """Mohr-Coulomb joint: friction angle (degrees), cohesion (Pa), tensile strength (Pa)."""
+
+    friction_angle: float = 0.0
+    cohesion: float = 0.0
+    tensile_strength: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.friction_angle < 90.0:
+            raise ModelError(f"joint friction_angle must lie in [0, 90) degrees, got {self.friction_angle}")
+        if not self.cohesion >= 0:
+            raise ModelError(f"joint cohesion must be >= 0, got {self.cohesion}")
+        if not self.tensile_strength >= 0:
+            raise ModelError(f"joint tensile_strength must be >= 0, got {self.tensile_strength}")
+
+
+def elasticity_matrix(mat: Material) -> np.ndarray:
+    """D relating (σx, σy, τxy) to (εx, εy, γxy), plane stress or plane strain."""
+    E, nu = mat.young, mat.poisson
+    if mat.plane == "stress":
+        c = E / (1 - nu * nu)
+        return c * np.array([[1, nu, 0], [nu, 1, 0], [0, 0, (1 - nu) / 2]])
+    c = E / ((1 + nu) * (1 - 2 * nu))
+    return c * np.array([[1 - nu, nu, 0], [nu, 1 - nu, 0], [0, 0, (1 - 2 * nu) / 2]])
+
+
+LoadFunction = Callable[[float], Sequence[float]]
+
+
+@dataclass(frozen=True)
+class Load:
+    """A force (N) as a function of time: constant, a table, or a callable."""
+
+    constant: tuple[float, float] | None = None
+    table: np.ndarray | None = None  # rows (t, fx, fy), linear interpolation, held at the ends
+    function: LoadFunction | None = None
+
+    def __call__(self, t: float) -> np.ndarray:
+        if self.function is not None:
+            return np.asarray(self.function(t), dtype=float)
+        if self.table is not None:
+            tt = self.table[:, 0]
+            return np.array([np.interp(t, tt, self.table[:, 1]), np.interp(t, tt, self.table[:, 2])])
+        return np.asarray(self.constant, dtype=float)
+
+    @staticmethod
+    def of(value: object) -> Load:
+        """A Load from a pair (constant), an (n, 3) table, a callable, or a Load."""
+        if isinstance(value, Load):
+            return value
+        if callable(value):
+            return Load(function=value)
+        arr = np.asarray(value, dtype=float)
+        if arr.shape == (2,):
+            return Load(constant=(float(arr[0]), float(arr[1])))
+        if arr.ndim == 2 and arr.shape[1] == 3 and len(arr) >= 1:
+            if np.any(np.diff(arr[:, 0]) <= 0):
+                raise ModelError("load table times must increase strictly")
+            return Load(table=arr)
+        raise ModelError("a load is [fx, fy], a table of [t, fx, fy] rows, or a callable of t")
+
+
+@dataclass
+class _Block:
+    vertices: np.ndarray
+    material: int
+    velocity: tuple[float, float, float]
+    stress: tuple[float, float, float]
+    name: str
+    fixed: bool = False
+    edge_joints: tuple[str | None, ...] | None = None  # joint material of edge i (vertex i to i+1)
+
+
+@dataclass(frozen=True)
+class ModelArrays:
+    """The model as flat arrays for the time loop (see :meth:`Model.arrays`).
+
+    ``points`` (np, 2) are the block-attached points (fixed, load, spring ends,
+    measured), owned by ``point_block``; index arrays say which row is which.
+    """
+
+    vertices: np.ndarray
+    block_ptr: np.ndarray
+    density: np.ndarray  # (nb,)
+    elasticity: np.ndarray  # (nb, 3, 3)
+    velocity: np.ndarray  # (nb, 6)
+    stress: np.ndarray  # (nb, 3)
+    gravity: np.ndarray  # (2,)
+    points: np.ndarray
+    point_block: np.ndarray
+    fixed_rows: np.ndarray
+    fixed_stiffness: np.ndarray  # nan = use the run's penalty
+    load_rows: np.ndarray
+    loads: tuple[Load, ...]
+    spring_rows_a: np.ndarray
+    spring_rows_b: np.ndarray
+    spring_stiffness: np.ndarray
+    measured_rows: np.ndarray
+    block_names: tuple[str, ...]
+    vertex_block: np.ndarray  # (nv,) owner block of each vertex
+    next_vertex: np.ndarray  # (nv,) next vertex of the same block
+    compliance: np.ndarray  # (nb, 3, 3) = inverse of elasticity
+    fixed_block: np.ndarray  # (nf,) block of each fixed point
+    block_fixed: np.ndarray  # (nb,) bool: the block does not move (ground, slope)
+    block_material: np.ndarray  # (nb,) index into the model's materials
+    edge_joint: np.ndarray  # (nv,) joint material of the edge starting at each vertex, -1 = by materials
+    joint_properties: np.ndarray  # (nj, 3): friction angle (rad), cohesion (Pa), tensile strength (Pa)
+    joint_by_materials: np.ndarray  # (nm, nm) joint index for a pair of block materials
+
+    @property
+    def n_blocks(self) -> int:
+        return len(self.block_ptr) - 1
+
+    def moments(self, vertices: np.ndarray) -> BlockMoments:
+        """Exact block integrals of a configuration of this model's blocks."""
+        return block_moments(vertices, self.block_ptr, self.vertex_block, self.next_vertex)
+
+
+@dataclass
+class Model:
+    """A 2D block system. Build it with the ``add_*`` methods; SI units throughout."""
+
+    gravity: tuple[float, float] = (0.0, 0.0)
+    materials: dict[str, Material] = field(default_factory=dict)
+    blocks: list[_Block] = field(default_factory=list)
+    fixed_points: list[tuple[int, np.ndarray, float]] = field(default_factory=list)
+    point_loads: list[tuple[int, np.ndarray, Load]] = field(default_factory=list)
+    point_springs: list[tuple[int, np.ndarray, int, np.ndarray, float]] = field(default_factory=list)
+    measured_points: list[tuple[int, np.ndarray]] = field(default_factory=list)
+    joint_materials: dict[str, JointMaterial] = field(default_factory=dict)
+    joint_map: dict[tuple[str, str], str] = field(default_factory=dict)
+    default_joint: JointMaterial = JointMaterial()
+
+    # -- building ---------------------------------------------------------
+    def add_material(self, name: str, material: Material) -> str:
+        self.materials[name] = material
+        return name
+
+    def add_joint_material(self, name: str, joint: JointMaterial, between: Sequence[tuple[str, str]] = ()) -> str:
+        """Add a joint material; ``between`` lists block-material pairs whose contacts use it."""
+        self.joint_materials[name] = joint
+        for a, b in between:
+            for m in (a, b):
+                if m not in self.materials:
+                    raise ModelError(f"joint material {name!r}: unknown block material {m!r}")
+            self.joint_map[(a, b)] = name
+        return name
+
+    def add_block(
+        self,
+        vertices: Sequence[Sequence[float]],
+        material: str,
+        velocity: Sequence[float] = (0.0, 0.0),
+        angular_velocity: float = 0.0,
+        stress: Sequence[float] = (0.0, 0.0, 0.0),
+        name: str | None = None,
+        fixed: bool = False,
+        edge_joints: Sequence[str | None] | None = None,
+    ) -> int:
+        """Add a simple polygon (any orientation; stored counter-clockwise); returns its index.
+
+        ``fixed`` blocks never move. ``edge_joints`` names the joint material of
+        each edge (edge i runs from vertex i to vertex i+1 as given); None or a
+        missing list means the joint is chosen by the block materials.
+        """
+        index = len(self.blocks)
+        label = name or f"block {index}"
+        if material not in self.materials:
+            raise ModelError(f"{label}: unknown material {material!r}")
+        raw = np.asarray(vertices, dtype=float)
+        verts = normalize_polygon(vertices, label)
+        joints: tuple[str | None, ...] | None = None
+        if edge_joints is not None:
+            joints = tuple(edge_joints)
+            if len(joints) != len(verts):
+                raise ModelError(f"{label}: edge_joints needs one entry per edge ({len(verts)}), got {len(joints)}")
+            for j in joints:
+                if j is not None and j not in self.joint_materials:
+                    raise ModelError(f"{label}: unknown joint material {j!r}")
+            if len(raw) > len(verts):
+                raw = raw[:-1]
+            if not np.array_equal(raw, verts):  # reversed to counter-clockwise: edge i -> edge n-2-i
+                joints = tuple(joints[(len(joints) - 2 - i) % len(joints)] for i in range(len(joints)))
+        v = tuple(float(a) for a in velocity)
+        if len(v) != 2:
+            raise ModelError(f"{label}: velocity must be [vx, vy]")
+        s = tuple(float(a) for a in stress)
+        if len(s) != 3:
+            raise ModelError(f"{label}: stress must be [sx, sy, txy]")
+        mat_index = list(self.materials).index(material)
+        self.blocks.append(_Block(verts, mat_index, (v[0], v[1], float(angular_velocity)), s, label, bool(fixed),
+                                  joints))
+        return index
+
+    def block_at(self, point: Sequence[float], what: str = "point") -> int:
+        """Index of the block containing ``point`` (on its boundary counts)."""
+        p = shapely.Point(point)
+        for i, b in enumerate(self.blocks):
+            if shapely.Polygon(b.vertices).buffer(1e-9 * _scale(b.vertices)).covers(p):
+                return i
+        raise ModelError(f"{what} at {tuple(point)} lies in no block")
+
+    def _resolve(self, point: Sequence[float], block: int | None, what: str) -> tuple[int, np.ndarray]:
+        p = np.asarray(point, dtype=float)
+        if p.shape != (2,) or not np.all(np.isfinite(p)):
+            raise ModelError(f"{what}: a point is [x, y] with finite coordinates")
+        if block is None:
+            block = self.block_at(p, what)
+        elif not 0 <= block < len(self.blocks):
+            raise ModelError(f"{what}: block {block} does not exist")
+        return block, p
+
+    def add_fixed_point(self, point: Sequence[float], block: int | None = None, stiffness: float | None = None) -> None:
+        """Pin ``point`` of a block to where it is now by a penalty spring (N/m; default: the run's penalty)."""
+        b, p = self._resolve(point, block, "fixed point")
+        self.fixed_points.append((b, p, np.nan if stiffness is None else float(stiffness)))
+
+    def add_point_load(self, point: Sequence[float], force: object, block: int | None = None) -> None:
+        """Apply a force (constant [fx, fy], table of [t, fx, fy], or callable of t) at a block point."""
+        b, p = self._resolve(point, block, "point load")
+        self.point_loads.append((b, p, Load.of(force)))
+
+    def add_point_spring(self, point_a: Sequence[float], point_b: Sequence[float], stiffness: float,
+                         block_a: int | None = None, block_b: int | None = None) -> None:
+        """Tie a point of one block to a point of another by a zero-length spring (N/m)."""
+        a, pa = self._resolve(point_a, block_a, "point spring end a")
+        b, pb = self._resolve(point_b, block_b, "point spring end b")
+        if not stiffness > 0:
+            raise ModelError("point spring stiffness must be > 0")
+        self.point_springs.append((a, pa, b, pb, float(stiffness)))
+
+    def add_measured_point(self, point: Sequence[float], block: int | None = None) -> int:
+        """Record position and velocity of a block point every step; returns its index."""
+        b, p = self._resolve(point, block, "measured point")
+        self.measured_points.append((b, p))
+        return len(self.measured_points) - 1
+
+    # -- compiling ---------------------------------------------------------
+    def arrays(self) -> ModelArrays:
+        """Flat arrays of the whole model for the time loop."""
+        if not self.blocks:
+            raise ModelError("the model has no blocks")
+        mats = list(self.materials.values())
+        counts = [len(b.vertices) for b in self.blocks]
+        groups: list[list[np.ndarray]] = [[], [], [], [], []]
+        owners: list[list[int]] = [[], [], [], [], []]
+        for b, p, _ in self.fixed_points:
+            groups[0].append(p)
+            owners[0].append(b)
+        for b, p, _ in self.point_loads:
+            groups[1].append(p)
+            owners[1].append(b)
+        for a, pa, b, pb, _ in self.point_springs:
+            groups[2].append(pa)
+            owners[2].append(a)
+            groups[3].append(pb)
+            owners[3].append(b)
+        for b, p in self.measured_points:
+            groups[4].append(p)
+            owners[4].append(b)
+        sizes = [len(g) for g in groups]
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+        rows = [np.arange(offsets[i], offsets[i + 1]) for i in range(5)]
+        pts = np.array([p for g in groups for p in g], dtype=float).reshape(-1, 2)
+        block_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        elasticity = np.array([elasticity_matrix(mats[b.material]) for b in self.blocks])
+        point_block = np.array([o for g in owners for o in g], dtype=np.int64)
+        joint_names = list(self.joint_materials)
+        joints = [self.default_joint, *self.joint_materials.values()]
+        mat_names = list(self.materials)
+        by_mats = np.zeros((len(mat_names), len(mat_names)), dtype=np.int64)
+        for (a, b), name in self.joint_map.items():
+            ia, ib = mat_names.index(a), mat_names.index(b)
+            by_mats[ia, ib] = by_mats[ib, ia] = joint_names.index(name) + 1
+        edge_joint = np.concatenate([
+            np.full(len(b.vertices), -1) if b.edge_joints is None
+            else np.array([-1 if j is None else joint_names.index(j) + 1 for j in b.edge_joints])
+            for b in self.blocks]).astype(np.int64)
+        return ModelArrays(
+            vertices=np.concatenate([b.vertices for b in self.blocks]),
+            block_ptr=block_ptr,
+            density=np.array([mats[b.material].density for b in self.blocks]),
+            elasticity=elasticity,
+            velocity=np.array([[*b.velocity, 0.0, 0.0, 0.0] for b in self.blocks]),
+            stress=np.array([b.stress for b in self.blocks], dtype=float),
+            gravity=np.asarray(self.gravity, dtype=float),
+            points=pts,
+            point_block=point_block,
+            fixed_rows=rows[0],
+            fixed_stiffness=np.array([k for _, _, k in self.fixed_points], dtype=float),
+            load_rows=rows[1],
+            loads=tuple(ld for _, _, ld in self.point_loads),
+            spring_rows_a=rows[2],
+            spring_rows_b=rows[3],
+            spring_stiffness=np.array([k for *_, k in self.point_springs], dtype=float),
+            measured_rows=rows[4],
+            block_names=tuple(b.name for b in self.blocks),
+            vertex_block=np.repeat(np.arange(len(counts)), counts),
+            next_vertex=next_vertex_index(block_ptr),
+            compliance=np.linalg.inv(elasticity),
+            fixed_block=point_block[rows[0]],
+            block_fixed=np.array([b.fixed for b in self.blocks], dtype=bool),
+            block_material=np.array([b.material for b in self.blocks], dtype=np.int64),
+            edge_joint=edge_joint,
+            joint_properties=np.array([[np.radians(j.friction_angle), j.cohesion, j.tensile_strength]
+                                       for j in joints]),
+            joint_by_materials=by_mats,
+        )
+
+
+def _scale(v: np.ndarray) -> float:
+    return float(np.ptp(v, axis=0).max())

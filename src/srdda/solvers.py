@@ -1,0 +1,121 @@
+"""The linear-solver seam: one small interface, several backends.
+
+``get_solver(name)`` returns an object with ``solve(system, rhs) -> x`` for a
+:class:`~srdda.assembly.BlockSystem`. Backends:
+
+* ``dense``: LAPACK (numpy) on the dense matrix; fastest for a handful of blocks.
+* ``superlu``: scipy's SuperLU with a symmetric ordering; always available.
+* ``cholmod``: CHOLMOD via scikit-sparse (``pip install srdda[cholmod]``);
+  needs a symmetric positive definite matrix (every penalty-only DDA system is).
+* ``pardiso``: MKL PARDISO via pypardiso (``pip install srdda[pardiso]``).
+* ``auto``: dense up to ``DENSE_LIMIT`` unknowns, else pardiso, cholmod or
+  superlu, the first that is installed.
+"""
+from __future__ import annotations
+
+import importlib.util
+from typing import Protocol
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse.linalg as spla
+
+from .assembly.system import BlockSystem
+
+__all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "DENSE_LIMIT"]
+
+DENSE_LIMIT = 120
+
+
+class SolverError(RuntimeError):
+    """The global system could not be solved (singular or not finite)."""
+
+
+class LinearSolver(Protocol):
+    name: str
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray: ...
+
+
+def _check(x: np.ndarray) -> np.ndarray:
+    if not np.all(np.isfinite(x)):
+        raise SolverError("the solution is not finite: the system is singular or ill-posed")
+    return x
+
+
+class DenseSolver:
+    name = "dense"
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        try:
+            return _check(sla.solve(system.to_dense(), rhs, assume_a="sym", check_finite=False))
+        except (np.linalg.LinAlgError, sla.LinAlgError) as exc:
+            raise SolverError(f"singular system: {exc}") from exc
+
+
+class SuperLUSolver:
+    name = "superlu"
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        A = system.to_csr().tocsc()
+        try:
+            lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                           options={"SymmetricMode": True})
+        except RuntimeError as exc:
+            raise SolverError(f"singular system: {exc}") from exc
+        return _check(lu.solve(rhs))
+
+
+class CholmodSolver:
+    name = "cholmod"
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        from sksparse.cholmod import CholmodError, cholesky
+
+        try:
+            factor = cholesky(system.to_csr().tocsc())
+        except CholmodError as exc:
+            raise SolverError(f"CHOLMOD failed: {exc}") from exc
+        return _check(factor(rhs))
+
+
+class PardisoSolver:
+    name = "pardiso"
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        import pypardiso
+
+        return _check(pypardiso.spsolve(system.to_csr(), rhs))
+
+
+class AutoSolver:
+    """Dense for tiny systems, the fastest installed sparse backend otherwise."""
+
+    name = "auto"
+
+    def __init__(self) -> None:
+        self.dense = DenseSolver()
+        self.sparse = next(get_solver(n) for n in ("pardiso", "cholmod", "superlu") if n in available_solvers())
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        chosen = self.dense if system.size <= DENSE_LIMIT else self.sparse
+        return chosen.solve(system, rhs)
+
+
+_BACKENDS = {"dense": DenseSolver, "superlu": SuperLUSolver, "cholmod": CholmodSolver,
+             "pardiso": PardisoSolver, "auto": AutoSolver}
+_MODULES = {"cholmod": "sksparse", "pardiso": "pypardiso"}
+
+
+def available_solvers() -> list[str]:
+    """Names of the backends usable on this machine."""
+    return [n for n in _BACKENDS if n not in _MODULES or importlib.util.find_spec(_MODULES[n]) is not None]
+
+
+def get_solver(name: str = "auto") -> LinearSolver:
+    """The backend called ``name`` (see module doc)."""
+    if name not in _BACKENDS:
+        raise ValueError(f"unknown solver {name!r}; choose one of {sorted(_BACKENDS)}")
+    if name not in available_solvers():
+        raise ValueError(f"solver {name!r} is not installed (pip install srdda[{name}])")
+    return _BACKENDS[name]()
