@@ -1,0 +1,204 @@
+"""Read and write srdda model files (TOML, schema in :mod:`srdda.io.schema`).
+
+``load_model(path)`` returns ``(Model, RunSettings)``; every problem in the
+file is reported as one :class:`ModelFileError` whose message names the file,
+the field (e.g. ``blocks[2].vertices``) and the problem.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import tomli_w
+from pydantic import ValidationError
+
+from ..geometry.polygon import PolygonError
+from ..model import JointMaterial, Load, Material, Model, ModelError
+from ..simulation import RunSettings
+from .schema import ModelFile
+
+__all__ = ["ModelFileError", "load_model", "model_from_dict", "save_model", "model_to_dict"]
+
+
+class ModelFileError(ValueError):
+    """A model file is unreadable or invalid; the message names the field."""
+
+
+def _field_path(loc: tuple[Any, ...]) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif part in ("function-after[_increasing()]",) or str(part).startswith("function-"):
+            continue
+        else:
+            out += ("." if out else "") + str(part)
+    return out or "(top level)"
+
+
+def _format_validation(exc: ValidationError, source: str) -> str:
+    lines = [f"{source}: invalid model file"]
+    for err in exc.errors():
+        msg = err["msg"]
+        if err["type"] == "extra_forbidden":
+            msg = "unknown field (check the spelling)"
+        elif err["type"] == "missing":
+            msg = "required field is missing"
+        lines.append(f"  {_field_path(err['loc'])}: {msg}")
+    return "\n".join(lines)
+
+
+def _block_index(ref: str | int | None, names: dict[str, int], n: int, where: str) -> int | None:
+    if ref is None:
+        return None
+    if isinstance(ref, int):
+        if not 0 <= ref < n:
+            raise ModelFileError(f"{where}: block index {ref} out of range (0..{n - 1})")
+        return ref
+    if ref not in names:
+        raise ModelFileError(f"{where}: no block named {ref!r}")
+    return names[ref]
+
+
+def model_from_dict(data: dict[str, Any], source: str = "model") -> tuple[Model, RunSettings]:
+    """Validate a model-file dictionary and build the model and its run settings."""
+    try:
+        spec = ModelFile.model_validate(data)
+    except ValidationError as exc:
+        raise ModelFileError(_format_validation(exc, source)) from None
+    try:
+        return _build(spec, source)
+    except (ModelError, PolygonError, ValueError) as exc:
+        if isinstance(exc, ModelFileError):
+            raise
+        raise ModelFileError(f"{source}: {exc}") from None
+
+
+def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
+    model = Model(gravity=spec.gravity)
+    for name, m in spec.materials.items():
+        model.add_material(name, Material(m.density, m.young, m.poisson, m.plane))
+    for name, j in spec.joint_materials.items():
+        model.add_joint_material(name, JointMaterial(j.friction_angle, j.cohesion, j.tensile_strength), j.between)
+    names: dict[str, int] = {}
+    for i, b in enumerate(spec.blocks):
+        label = b.name or f"block {i}"
+        if b.material not in spec.materials:
+            raise ModelFileError(f"{source}: blocks[{i}].material: unknown material {b.material!r}")
+        try:
+            joints = None if b.edge_joints is None else [j or None for j in b.edge_joints]
+            model.add_block(b.vertices, b.material, b.velocity, b.angular_velocity, b.stress, label, b.fixed, joints)
+        except (ModelError, PolygonError) as exc:
+            raise ModelFileError(f"{source}: blocks[{i}]: {exc}") from None
+        if b.name is not None:
+            if b.name in names:
+                raise ModelFileError(f"{source}: blocks[{i}].name: duplicate block name {b.name!r}")
+            names[b.name] = i
+    n = len(spec.blocks)
+
+    def where(section: str, i: int) -> str:
+        return f"{source}: {section}[{i}]"
+
+    try:
+        for i, f in enumerate(spec.fixed_points):
+            model.add_fixed_point(f.at, _block_index(f.block, names, n, where("fixed_points", i)), f.stiffness)
+        for i, p in enumerate(spec.point_loads):
+            if (p.force is None) == (p.table is None):
+                raise ModelFileError(f"{where('point_loads', i)}: give exactly one of 'force' or 'table'")
+            load = Load.of(p.force if p.force is not None else np.array(p.table))
+            model.add_point_load(p.at, load, _block_index(p.block, names, n, where("point_loads", i)))
+        for i, s in enumerate(spec.point_springs):
+            model.add_point_spring(s.a, s.b, s.stiffness, _block_index(s.block_a, names, n, where("point_springs", i)),
+                                   _block_index(s.block_b, names, n, where("point_springs", i)))
+        for i, mp in enumerate(spec.measured_points):
+            model.add_measured_point(mp.at, _block_index(mp.block, names, n, where("measured_points", i)))
+    except ModelError as exc:
+        raise ModelFileError(f"{source}: {exc}") from None
+    r = spec.run
+    settings = RunSettings(dt=r.dt, n_steps=r.steps, method=r.method, rho_inf=r.rho_inf, scheme=r.scheme,
+                           linearization=r.linearization, penalty=r.penalty, solver=r.solver,
+                           record_every=r.record_every)
+    return model, settings
+
+
+def load_model(path: str | Path) -> tuple[Model, RunSettings]:
+    """Read a TOML model file; raises :class:`ModelFileError` with a clear message."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelFileError(f"{p}: cannot read the model file ({exc.strerror})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelFileError(f"{p}: not valid TOML ({exc})") from None
+    return model_from_dict(data, str(p))
+
+
+def _pt(p: np.ndarray) -> list[float]:
+    return [float(p[0]), float(p[1])]
+
+
+def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[str, Any]:
+    """The model-file dictionary of a model (loads given as callables cannot be written)."""
+    mats = list(model.materials)
+    run: dict[str, Any] = {"method": settings.method, "dt": settings.dt, "steps": settings.n_steps,
+                           "rho_inf": settings.rho_inf, "penalty": settings.penalty, "solver": settings.solver,
+                           "record_every": settings.record_every}
+    if settings.scheme is not None:
+        run["scheme"] = settings.scheme
+    if settings.linearization is not None:
+        run["linearization"] = settings.linearization
+    out: dict[str, Any] = {"title": title, "units": "SI", "gravity": list(map(float, model.gravity)), "run": run,
+                           "materials": {n: {"density": m.density, "young": m.young, "poisson": m.poisson,
+                                             "plane": m.plane} for n, m in model.materials.items()}}
+    if model.joint_materials:
+        out["joint_materials"] = {
+            n: {"friction_angle": j.friction_angle, "cohesion": j.cohesion, "tensile_strength": j.tensile_strength,
+                "between": [list(k) for k, v in model.joint_map.items() if v == n]}
+            for n, j in model.joint_materials.items()}
+    blocks = []
+    for b in model.blocks:
+        entry: dict[str, Any] = {"name": b.name, "material": mats[b.material],
+                                 "vertices": [_pt(v) for v in b.vertices]}
+        if any(b.velocity):
+            entry["velocity"] = [b.velocity[0], b.velocity[1]]
+            entry["angular_velocity"] = b.velocity[2]
+        if any(b.stress):
+            entry["stress"] = list(b.stress)
+        if b.fixed:
+            entry["fixed"] = True
+        if b.edge_joints is not None:
+            entry["edge_joints"] = [j if j is not None else "" for j in b.edge_joints]
+        blocks.append(entry)
+    out["blocks"] = blocks
+    if model.fixed_points:
+        out["fixed_points"] = [{"at": _pt(p), "block": i, **({} if math.isnan(k) else {"stiffness": k})}
+                               for i, p, k in model.fixed_points]
+    loads = []
+    for i, p, ld in model.point_loads:
+        if ld.function is not None:
+            raise ModelFileError(f"point load at {_pt(p)} is a Python callable and cannot be written to a file")
+        entry = {"at": _pt(p), "block": i}
+        if ld.table is not None:
+            entry["table"] = ld.table.tolist()
+        else:
+            entry["force"] = list(ld.constant)
+        loads.append(entry)
+    if loads:
+        out["point_loads"] = loads
+    if model.point_springs:
+        out["point_springs"] = [{"a": _pt(pa), "b": _pt(pb), "block_a": a, "block_b": b, "stiffness": k}
+                                for a, pa, b, pb, k in model.point_springs]
+    if model.measured_points:
+        out["measured_points"] = [{"at": _pt(p), "block": i} for i, p in model.measured_points]
+    return out
+
+
+def save_model(model: Model, settings: RunSettings, path: str | Path, title: str = "") -> None:
+    """Write a model and its run settings as a TOML model file."""
+    data = model_to_dict(model, settings, title)
+    Path(path).write_text(tomli_w.dumps(data), encoding="utf-8")

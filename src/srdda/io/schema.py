@@ -1,0 +1,120 @@
+"""Schema of the srdda model file (TOML), validated with pydantic.
+
+Every table forbids unknown keys, so a misspelt field is an error that names
+it. Quantities marked with a unit kind accept a number (SI) or "value unit".
+See docs/model-file.md for the format with an example.
+"""
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator
+
+from .units import to_si
+
+__all__ = ["ModelFile", "RunSection", "MaterialSection", "BlockSection", "PointRef", "FixedPointSection",
+           "PointLoadSection", "PointSpringSection", "MeasuredPointSection", "JointMaterialSection"]
+
+
+def _unit(kind: str) -> BeforeValidator:
+    return BeforeValidator(lambda v: to_si(v, kind))
+
+
+Pressure = Annotated[float, _unit("pressure")]
+Stiffness = Annotated[float, _unit("stiffness")]
+Density = Annotated[float, _unit("density")]
+Time = Annotated[float, _unit("time")]
+Angle = Annotated[float, _unit("angle")]
+Point = tuple[float, float]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class RunSection(_Strict):
+    """How to run: method, time step (s), number of steps, scheme parameters."""
+
+    method: Literal["dda0", "dda1", "srdda"] = "srdda"
+    dt: Time = Field(gt=0)
+    steps: int = Field(ge=0)
+    rho_inf: float = Field(1.0, ge=0, le=1)
+    scheme: Literal["shi", "paper", "chung-hulbert"] | None = None
+    linearization: Literal["start", "secant"] | None = None
+    penalty: Stiffness = Field(1e9, gt=0)
+    solver: Literal["auto", "dense", "superlu", "cholmod", "pardiso"] = "auto"
+    record_every: int = Field(1, ge=1)
+
+
+class MaterialSection(_Strict):
+    density: Density = Field(ge=0)
+    young: Pressure = Field(gt=0)
+    poisson: float = Field(gt=-1, lt=0.5)
+    plane: Literal["stress", "strain"] = "stress"
+
+
+class JointMaterialSection(_Strict):
+    friction_angle: Angle = Field(0.0, ge=0, lt=90)
+    cohesion: Pressure = Field(0.0, ge=0)
+    tensile_strength: Pressure = Field(0.0, ge=0)
+    between: list[tuple[str, str]] = []
+
+
+class BlockSection(_Strict):
+    name: str | None = None
+    material: str
+    vertices: list[Point] = Field(min_length=3)
+    velocity: Point = (0.0, 0.0)
+    angular_velocity: float = 0.0
+    stress: tuple[Pressure, Pressure, Pressure] = (0.0, 0.0, 0.0)
+    fixed: bool = False
+    edge_joints: list[str] | None = None  # joint material per edge; "" = chosen by block materials
+
+
+class PointRef(_Strict):
+    at: Point
+    block: str | int | None = None
+
+
+class FixedPointSection(PointRef):
+    stiffness: Stiffness | None = Field(None, gt=0)
+
+
+class PointLoadSection(PointRef):
+    force: Point | None = None
+    table: list[tuple[Time, float, float]] | None = None
+
+    @field_validator("table")
+    @classmethod
+    def _increasing(cls, v: list[tuple[float, float, float]] | None) -> list[tuple[float, float, float]] | None:
+        if v is not None and any(b[0] <= a[0] for a, b in zip(v, v[1:])):
+            raise ValueError("table times must increase strictly")
+        return v
+
+
+class PointSpringSection(_Strict):
+    a: Point
+    b: Point
+    block_a: str | int | None = None
+    block_b: str | int | None = None
+    stiffness: Stiffness = Field(gt=0)
+
+
+class MeasuredPointSection(PointRef):
+    pass
+
+
+class ModelFile(_Strict):
+    """The whole model file."""
+
+    title: str = ""
+    units: Literal["SI"] = "SI"
+    gravity: Point = (0.0, 0.0)
+    run: RunSection
+    materials: dict[str, MaterialSection] = Field(min_length=1)
+    joint_materials: dict[str, JointMaterialSection] = {}
+    blocks: list[BlockSection] = Field(min_length=1)
+    fixed_points: list[FixedPointSection] = []
+    point_loads: list[PointLoadSection] = []
+    point_springs: list[PointSpringSection] = []
+    measured_points: list[MeasuredPointSection] = []

@@ -1,0 +1,65 @@
+"""Registry of the paper's examples: how to build each, and how to tabulate it.
+
+An example is a model file under ``examples/paper/`` (or a Python builder)
+plus a ``tables(results)`` function that turns one :class:`~srdda.Result` per
+method into rows ``{"table", "quantity", "step", "method", "ours", "paper",
+"exact"}`` (``step`` None where a row is not tied to a step, ``exact`` None
+where there is no analytical value).
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from ..model import Model
+from ..simulation import Result, RunSettings
+
+__all__ = ["Example", "EXAMPLES", "register", "get_example", "examples_dir", "Row"]
+
+Row = dict[str, Any]
+
+
+def examples_dir() -> Path:
+    """The ``examples/`` folder: $SRDDA_EXAMPLES, else the one beside the source tree."""
+    env = os.environ.get("SRDDA_EXAMPLES")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parents[3] / "examples"
+
+
+@dataclass(frozen=True)
+class Example:
+    """One paper example: ``name`` as on the command line, a builder and a tabulator."""
+
+    name: str
+    title: str
+    tables: Callable[[dict[str, Result]], list[Row]]
+    model_file: str | None = None  # under examples/paper/
+    builder: Callable[[str], tuple[Model, RunSettings]] | None = None
+
+    def build(self, method: str) -> tuple[Model, RunSettings]:
+        """The model and run settings of this example for ``method``."""
+        if self.builder is not None:
+            return self.builder(method)
+        from ..io.modelfile import load_model
+
+        path = examples_dir() / "paper" / str(self.model_file)
+        model, settings = load_model(path)
+        return model, replace(settings, method=method)
+
+
+EXAMPLES: dict[str, Example] = {}
+
+
+def register(example: Example) -> Example:
+    EXAMPLES[example.name] = example
+    return example
+
+
+def get_example(name: str) -> Example:
+    if name not in EXAMPLES:
+        raise KeyError(f"unknown paper example {name!r}; choose one of {', '.join(EXAMPLES)}")
+    return EXAMPLES[name]
