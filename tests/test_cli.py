@@ -55,3 +55,11 @@ vertices = [[0, 0], [1, 0], [1, 1], [0, 1]]
     assert res.exit_code == 3, res.output
     assert "diverged" in res.output and "singular" in res.output
     assert np.load(tmp_path / "out" / "histories.npz")["step"].tolist() == [0]
+
+
+def test_paper_report_lists_every_row(tmp_path):
+    res = CliRunner().invoke(main, ["paper", "rod", "--method", "dda0", "--report", str(tmp_path), "--quiet"])
+    assert res.exit_code == 0, res.output
+    text = (tmp_path / "report.md").read_text()
+    # Table 3 has 4 steps and Table 4 two directions: 6 rows for one method
+    assert text.count("| dda0 |") == 6 and "Table 4" in text

@@ -121,8 +121,10 @@ def print_rows(rows: list[dict]) -> None:
 @click.argument("example", type=click.Choice([*EXAMPLES, "all"]))
 @click.option("--method", type=click.Choice([*METHODS, "all"]), default="all", show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document instead of tables.")
+@click.option("--report", "report_dir", type=click.Path(file_okay=False), default=None,
+              help="Also write a report (Markdown) of every table into this folder.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def paper_command(example: str, method: str, as_json: bool, quiet: bool) -> None:
+def paper_command(example: str, method: str, as_json: bool, report_dir: str | None, quiet: bool) -> None:
     """Run one of the paper's examples and print its tables beside the paper's."""
     methods = list(METHODS) if method == "all" else [method]
     names = list(EXAMPLES) if example == "all" else [example]
@@ -148,6 +150,29 @@ def paper_command(example: str, method: str, as_json: bool, quiet: bool) -> None
             print_rows(rows)
     if as_json:
         click.echo(json.dumps(documents[0] if len(documents) == 1 else documents, indent=1))
+    if report_dir is not None:
+        path = write_tables_report(Path(report_dir), documents)
+        click.echo(f"report written to {path}", err=as_json)
+
+
+def write_tables_report(out: Path, documents: list[dict]) -> Path:
+    """Write every example's rows as Markdown tables (ours beside the paper's) to out/report.md."""
+    out.mkdir(parents=True, exist_ok=True)
+    lines = ["# srdda: the paper's examples, ours beside the paper's", "",
+             f"srdda {__version__}; every number below comes from runs made by this command.", ""]
+    for doc in documents:
+        lines += [f"## {EXAMPLES[doc['example']].title}", "",
+                  "| table | quantity | step | method | ours | paper | exact | RE ours | RE paper |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for r in doc["rows"]:
+            re_paper = None if r["paper"] is None else relative_error(r["paper"], r["exact"])
+            lines.append(f"| {r['table']} | {r['quantity']} | {'-' if r['step'] is None else r['step']} | "
+                         f"{r['method']} | {_fmt(r['ours'])} | {_fmt(r['paper'])} | {_fmt(r['exact'])} | "
+                         f"{_pct(relative_error(r['ours'], r['exact']))} | {_pct(re_paper)} |")
+        lines.append("")
+    path = out / "report.md"
+    path.write_text("\n".join(lines), encoding="utf-8")
+    return path
 
 
 if __name__ == "__main__":
