@@ -1,0 +1,418 @@
+"""The results file: one self-describing HDF5 file per run, written as it goes.
+
+:class:`ResultsStore` is a :class:`~srdda.simulation.Recorder`. It buffers the
+recorded steps in memory and every ``flush_every`` recorded steps appends them
+to resizable, chunked datasets, writes a checkpoint of the full
+:class:`~srdda.simulation.State` and flushes the file. A run killed at any
+moment (even by SIGKILL) leaves a file holding every step up to the last flush,
+and :func:`resume` continues it from the last checkpoint, appending to the same
+file. :func:`read_results` reads a file back into a :class:`StoredResult` with
+the same histories as an in-memory :class:`~srdda.simulation.Result`.
+
+Layout (see docs/results.md)::
+
+    /                 attrs: format, format_version, srdda_version, method, status,
+                      last_step, flush_every, contact_every, created
+    /versions         attrs: python, numpy, scipy, h5py, hdf5, ...
+    /settings         attrs: json (the RunSettings)
+    /model            one dataset per array field of ModelArrays; attrs: block_names,
+                      model_text (when the model came from a file), loads (json)
+    /history/<name>   first axis = recorded step: step, time, centroid, area,
+                      rotation, velocity, stress, vertices, measured_position,
+                      measured_velocity, energy (attr names), iterations
+    /checkpoint/<f>   first axis = flush: step, time and the State's arrays
+    /contacts/<name>  rows of all recorded contacts, ``offsets`` (k+1) and ``step`` (k)
+
+Every appended dataset only grows, so the extent stored at the last flush is
+always consistent; readers take the shortest extent of a group as its length.
+"""
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import platform
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..model import Load, Model, ModelArrays
+from ..simulation import Result, RunSettings, State, energies, measured_points, run
+
+__all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "ResultsStore", "ResultsFileError", "StoredResult",
+           "read_results", "resume", "load_checkpoint", "model_arrays_from_file"]
+
+FORMAT = "srdda-results"
+FORMAT_VERSION = 1
+ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "total")
+STATE_ARRAYS = ("vertices", "points", "velocity", "acceleration", "stress", "rotation")
+
+ContactProvider = Callable[[ModelArrays, State], Mapping[str, np.ndarray]]
+"""Hook for contact output: returns per-contact arrays (first axis = contact) of one state.
+
+The contacts module supplies it (e.g. ``{"point": (nc, 2), "normal": (nc, 2),
+"normal_force": (nc,), "shear_force": (nc,), "block_a": (nc,), "block_b": (nc,)}``);
+the store appends them every ``contact_every`` recorded steps under ``/contacts``.
+"""
+
+
+class ResultsFileError(ValueError):
+    """The file is not an srdda results file or lacks what is asked of it."""
+
+
+def _versions() -> dict[str, str]:
+    import scipy
+
+    from .. import __version__
+
+    return {"srdda": __version__, "python": platform.python_version(), "numpy": np.__version__,
+            "scipy": scipy.__version__, "h5py": h5py.__version__, "hdf5": h5py.version.hdf5_version,
+            "platform": platform.platform()}
+
+
+def _chunk_rows(row_shape: tuple[int, ...], itemsize: int, rows: int) -> int:
+    """Rows per chunk: one flush worth of rows, capped near 1 MiB per chunk."""
+    row_bytes = max(1, int(np.prod(row_shape, dtype=np.int64)) * itemsize)
+    return int(max(1, min(rows, (1 << 20) // row_bytes)))
+
+
+def _append(group: h5py.Group, name: str, rows: np.ndarray, chunk_rows: int) -> None:
+    """Append ``rows`` (first axis = new rows) to a resizable dataset, creating it if needed."""
+    rows = np.asarray(rows)
+    if name not in group:
+        group.create_dataset(name, shape=(0, *rows.shape[1:]), maxshape=(None, *rows.shape[1:]),
+                             dtype=rows.dtype, chunks=(_chunk_rows(rows.shape[1:], rows.dtype.itemsize, chunk_rows),
+                                                       *rows.shape[1:]))
+    ds = group[name]
+    n = ds.shape[0]
+    ds.resize(n + len(rows), axis=0)
+    ds[n:] = rows
+
+
+def _group_length(group: h5py.Group, names: Sequence[str] | None = None) -> int:
+    """Rows every dataset of ``group`` holds (the shortest extent)."""
+    keys = [k for k in (names or group.keys()) if k in group and isinstance(group[k], h5py.Dataset)]
+    return min((group[k].shape[0] for k in keys), default=0)
+
+
+def _load_to_json(load: Load) -> dict | None:
+    if load.function is not None:
+        return None
+    if load.table is not None:
+        return {"table": np.asarray(load.table).tolist()}
+    return {"constant": list(load.constant)}
+
+
+def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None) -> None:
+    """Every array field of ``arrays`` as a dataset; names, loads and the model text as attributes."""
+    for f in dataclasses.fields(arrays):
+        value = getattr(arrays, f.name)
+        if isinstance(value, np.ndarray):
+            group.create_dataset(f.name, data=value)
+    group.attrs["block_names"] = json.dumps(list(arrays.block_names))
+    group.attrs["loads"] = json.dumps([_load_to_json(ld) for ld in arrays.loads])
+    if model_text is not None:
+        group.attrs["model_text"] = model_text
+
+
+def model_arrays_from_file(path: str | Path) -> ModelArrays:
+    """The :class:`ModelArrays` stored in a results file (callable loads cannot be stored)."""
+    with _open_read(path) as f:
+        g = f["model"]
+        loads_json = json.loads(g.attrs["loads"])
+        if any(ld is None for ld in loads_json):
+            raise ResultsFileError(f"{path}: the model has a point load given as a Python function, which a file "
+                                   "cannot hold; pass the model to resume(..., model=...)")
+        kwargs: dict[str, object] = {}
+        for f_ in dataclasses.fields(ModelArrays):
+            if f_.name == "block_names":
+                kwargs[f_.name] = tuple(json.loads(g.attrs["block_names"]))
+            elif f_.name == "loads":
+                kwargs[f_.name] = tuple(Load(constant=tuple(ld["constant"])) if "constant" in ld
+                                        else Load(table=np.asarray(ld["table"], dtype=float)) for ld in loads_json)
+            elif f_.name in g:
+                kwargs[f_.name] = g[f_.name][()]
+            else:
+                raise ResultsFileError(f"{path}: the stored model lacks field {f_.name!r} (written by another "
+                                       "srdda version?); pass the model to resume(..., model=...)")
+        return ModelArrays(**kwargs)
+
+
+def _open_read(path: str | Path) -> h5py.File:
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise ResultsFileError(f"{path}: cannot open as an HDF5 results file ({exc})") from exc
+    if f.attrs.get("format") != FORMAT:
+        f.close()
+        raise ResultsFileError(f"{path}: not an srdda results file (no format={FORMAT!r} attribute)")
+    return f
+
+
+@dataclass
+class ResultsStore:
+    """Recorder writing a run into an HDF5 file incrementally (see the module docstring).
+
+    ``flush_every``: recorded steps between flushes (and checkpoints); a killed
+    run loses at most that many recorded steps. ``contact_provider`` and
+    ``contact_every`` are the hook for contact output. ``model_text``: the
+    model file's text, stored for provenance and re-runs.
+    """
+
+    path: str | Path
+    settings: RunSettings
+    flush_every: int = 100
+    model_text: str | None = None
+    contact_provider: ContactProvider | None = None
+    contact_every: int = 1
+    append: bool = False  # used by resume(): continue an existing file
+    _file: h5py.File | None = field(default=None, init=False, repr=False)
+    _buffer: dict[str, list[np.ndarray]] = field(default_factory=dict, init=False, repr=False)
+    _contacts: dict[str, list[np.ndarray]] = field(default_factory=dict, init=False, repr=False)
+    _contact_steps: list[int] = field(default_factory=list, init=False, repr=False)
+    _contact_counts: list[int] = field(default_factory=list, init=False, repr=False)
+    _pending: int = field(default=0, init=False, repr=False)
+    _recorded: int = field(default=0, init=False, repr=False)
+    _last_step: int = field(default=-1, init=False, repr=False)
+    _state: State | None = field(default=None, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.flush_every < 1:
+            raise ValueError(f"flush_every must be >= 1, got {self.flush_every}")
+        if self.contact_every < 1:
+            raise ValueError(f"contact_every must be >= 1, got {self.contact_every}")
+
+    # -- Recorder protocol ----------------------------------------------------
+    def record(self, arrays: ModelArrays, state: State, penalty: float, solves: int) -> None:
+        """Buffer one recorded step; flush every ``flush_every`` of them."""
+        if self._file is None:
+            self._open(arrays, state)
+        if state.step <= self._last_step:  # a resumed run re-records its starting state
+            return
+        mom = state.moments
+        pos, vel = measured_points(arrays, state)
+        e = energies(arrays, state, penalty)
+        row = {"step": np.int64(state.step), "time": np.float64(state.time), "centroid": mom.centroid,
+               "area": mom.area, "rotation": state.rotation, "velocity": state.velocity, "stress": state.stress,
+               "vertices": state.vertices, "measured_position": pos, "measured_velocity": vel,
+               "energy": np.array([e[k] for k in ENERGY_NAMES]), "iterations": np.int64(solves)}
+        for name, value in row.items():
+            self._buffer.setdefault(name, []).append(np.array(value, copy=True))
+        if self.contact_provider is not None and self._recorded % self.contact_every == 0:
+            self._record_contacts(arrays, state)
+        self._recorded += 1
+        self._last_step = state.step
+        self._state = state
+        self._pending += 1
+        if self._pending >= self.flush_every:
+            self.flush()
+
+    def finish(self, status: str, state: State) -> None:
+        """Write what is buffered, a final checkpoint and the status; close the file."""
+        if self._file is None:
+            return
+        self._state = state if state.step >= self._last_step else self._state
+        self.flush()
+        self._file.attrs["status"] = status
+        self._file.close()
+        self._file = None
+
+    # -- writing ------------------------------------------------------------------
+    def flush(self) -> None:
+        """Append the buffered steps and a checkpoint of the last state; flush the file."""
+        f = self._file
+        if f is None:
+            return
+        hist = f["history"]
+        for name, rows in self._buffer.items():
+            if rows:
+                _append(hist, name, np.stack(rows), self.flush_every)
+        self._buffer = {}
+        hist["energy"].attrs["names"] = json.dumps(ENERGY_NAMES)
+        if self._contact_steps:
+            g = f["contacts"]
+            counts = self._contact_counts
+            start = int(g["offsets"][-1]) if "offsets" in g and len(g["offsets"]) else 0
+            if "offsets" not in g:
+                _append(g, "offsets", np.zeros(1, dtype=np.int64), 1024)
+            for name, rows in self._contacts.items():
+                if rows:
+                    _append(g, name, np.concatenate(rows), 4096)
+            _append(g, "step", np.array(self._contact_steps, dtype=np.int64), 1024)
+            _append(g, "offsets", start + np.cumsum(counts, dtype=np.int64), 1024)
+            self._contacts, self._contact_steps, self._contact_counts = {}, [], []
+        if self._state is not None:
+            cp = f["checkpoint"]
+            s = self._state
+            if not ("step" in cp and len(cp["step"]) and cp["step"][-1] == s.step):
+                for name in STATE_ARRAYS:
+                    _append(cp, name, getattr(s, name)[None], 4)
+                _append(cp, "time", np.array([s.time]), 64)
+                _append(cp, "step", np.array([s.step], dtype=np.int64), 64)  # written last: marks it complete
+        self._pending = 0
+        f.flush()
+
+    def _record_contacts(self, arrays: ModelArrays, state: State) -> None:
+        data = {k: np.asarray(v) for k, v in self.contact_provider(arrays, state).items()}  # type: ignore[misc]
+        sizes = {len(v) for v in data.values()}
+        if len(sizes) > 1:
+            raise ValueError(f"contact arrays of step {state.step} differ in length: {sizes}")
+        for name, value in data.items():
+            self._contacts.setdefault(name, []).append(value)
+        self._contact_counts.append(sizes.pop() if sizes else 0)
+        self._contact_steps.append(state.step)
+
+    def _open(self, arrays: ModelArrays, state: State) -> None:
+        if self.append:
+            self._file = h5py.File(self.path, "a")
+            self._last_step = _truncate_to_checkpoint(self._file)
+            self._file.attrs["status"] = "running"
+            return
+        f = h5py.File(self.path, "w")
+        f.attrs.update({"format": FORMAT, "format_version": FORMAT_VERSION, "method": self.settings.method,
+                        "status": "running", "last_step": state.step + self.settings.n_steps,
+                        "flush_every": self.flush_every, "contact_every": self.contact_every,
+                        "created": datetime.datetime.now(datetime.timezone.utc).isoformat()})
+        from .. import __version__
+
+        f.attrs["srdda_version"] = __version__
+        f.create_group("versions").attrs.update(_versions())
+        f.create_group("settings").attrs["json"] = json.dumps(dataclasses.asdict(self.settings))
+        _write_model(f.create_group("model"), arrays, self.model_text)
+        f.create_group("history")
+        f.create_group("checkpoint")
+        f.create_group("contacts")
+        f.flush()
+        self._file = f
+
+
+def _truncate_to_checkpoint(f: h5py.File) -> int:
+    """Cut every appended dataset back to the last complete checkpoint; return its step."""
+    cp = f["checkpoint"]
+    n_cp = _group_length(cp)
+    if n_cp == 0:
+        raise ResultsFileError(f"{f.filename}: no checkpoint was flushed; nothing to resume from")
+    for ds in cp.values():
+        ds.resize(n_cp, axis=0)
+    step = int(cp["step"][n_cp - 1])
+    hist = f["history"]
+    n = _group_length(hist)
+    keep = int(np.searchsorted(hist["step"][:n], step, side="right"))
+    for ds in hist.values():
+        ds.resize(keep, axis=0)
+    c = f["contacts"]
+    if "step" in c:
+        k = min(len(c["step"]), len(c["offsets"]) - 1)
+        k = int(np.searchsorted(c["step"][:k], step, side="right"))
+        rows = int(c["offsets"][k])
+        for name, ds in c.items():
+            ds.resize({"step": k, "offsets": k + 1}.get(name, rows), axis=0)
+    return step
+
+
+# -- reading ----------------------------------------------------------------------
+@dataclass
+class StoredResult:
+    """The histories of a results file (rows = recorded steps), like :class:`~srdda.simulation.Result`."""
+
+    path: str
+    block_names: tuple[str, ...]
+    method: str
+    status: str
+    settings: RunSettings
+    histories: dict[str, np.ndarray]
+    energy_names: tuple[str, ...]
+    block_ptr: np.ndarray
+    block_material: np.ndarray
+    block_fixed: np.ndarray
+    initial_vertices: np.ndarray
+    contacts: dict[str, np.ndarray]
+    model_text: str | None
+    versions: dict[str, str]
+
+    def array(self, name: str) -> np.ndarray:
+        """A history as one array (first axis = recorded step); ``energy`` has columns ``energy_names``."""
+        if name not in self.histories:
+            raise KeyError(f"no history {name!r}; the file has {sorted(self.histories)}")
+        return self.histories[name]
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        hist = self.__dict__.get("histories", {})
+        if name in hist:
+            return hist[name]
+        raise AttributeError(name)
+
+    @property
+    def completed(self) -> bool:
+        return self.status == "completed"
+
+    def contacts_at(self, index: int) -> dict[str, np.ndarray]:
+        """The contact arrays of the ``index``-th contact record."""
+        off = self.contacts["offsets"]
+        return {k: v[off[index]:off[index + 1]] for k, v in self.contacts.items() if k not in ("offsets", "step")}
+
+
+def read_results(path: str | Path) -> StoredResult:
+    """Read every flushed step of a results file (also of a run that was killed)."""
+    with _open_read(path) as f:
+        hist = f["history"]
+        n = _group_length(hist)
+        histories = {k: ds[:n] for k, ds in hist.items()}
+        g = f["model"]
+        c = f["contacts"]
+        contacts: dict[str, np.ndarray] = {}
+        if "step" in c:
+            k = min(len(c["step"]), len(c["offsets"]) - 1)
+            rows = int(c["offsets"][k])
+            contacts = {name: ds[:k] if name == "step" else ds[:k + 1] if name == "offsets" else ds[:rows]
+                        for name, ds in c.items()}
+        energy_names = tuple(json.loads(hist["energy"].attrs["names"])) if "energy" in hist else ENERGY_NAMES
+        return StoredResult(
+            path=str(path), block_names=tuple(json.loads(g.attrs["block_names"])), method=str(f.attrs["method"]),
+            status=str(f.attrs["status"]), settings=RunSettings(**json.loads(f["settings"].attrs["json"])),
+            histories=histories, energy_names=energy_names, block_ptr=g["block_ptr"][()],
+            block_material=g["block_material"][()], block_fixed=g["block_fixed"][()],
+            initial_vertices=g["vertices"][()], contacts=contacts,
+            model_text=str(g.attrs["model_text"]) if "model_text" in g.attrs else None,
+            versions={k: str(v) for k, v in f["versions"].attrs.items()})
+
+
+def load_checkpoint(path: str | Path, arrays: ModelArrays) -> State:
+    """The :class:`State` of the last complete checkpoint of a results file."""
+    with _open_read(path) as f:
+        cp = f["checkpoint"]
+        n = _group_length(cp)
+        if n == 0:
+            raise ResultsFileError(f"{path}: no checkpoint was flushed; nothing to resume from")
+        values = {name: cp[name][n - 1] for name in STATE_ARRAYS}
+        step, time = int(cp["step"][n - 1]), float(cp["time"][n - 1])
+    if values["vertices"].shape != arrays.vertices.shape:
+        raise ResultsFileError(f"{path}: the checkpoint has {len(values['vertices'])} vertices, "
+                               f"the model {len(arrays.vertices)}")
+    return State(step=step, time=time, moments=arrays.moments(values["vertices"]), **values)
+
+
+def resume(path: str | Path, model: Model | ModelArrays | None = None, flush_every: int | None = None,
+           progress: Callable[[int], None] | None = None, contact_provider: ContactProvider | None = None,
+           ) -> Result:
+    """Continue the run of a results file from its last checkpoint up to its last step, appending to it.
+
+    The model comes from the file unless given (a model with Python-function
+    loads must be given). Returns the in-memory :class:`Result` of the
+    continued part; the file then holds the whole run.
+    """
+    arrays = model_arrays_from_file(path) if model is None else (
+        model.arrays() if isinstance(model, Model) else model)
+    with _open_read(path) as f:
+        settings = RunSettings(**json.loads(f["settings"].attrs["json"]))
+        last_step = int(f.attrs["last_step"])
+        stored_flush = int(f.attrs["flush_every"])
+        contact_every = int(f.attrs["contact_every"])
+    state = load_checkpoint(path, arrays)
+    remaining = dataclasses.replace(settings, n_steps=max(0, last_step - state.step))
+    store = ResultsStore(path, remaining, flush_every=flush_every or stored_flush, append=True,
+                         contact_provider=contact_provider, contact_every=contact_every)
+    return run(arrays, remaining, progress=progress, state=state, recorders=[store])

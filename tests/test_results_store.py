@@ -1,0 +1,148 @@
+"""The HDF5 results store: content, crash safety (SIGKILL) and resume."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+import srdda
+from srdda.io.results_store import (ResultsFileError, ResultsStore, load_checkpoint, model_arrays_from_file,
+                                    read_results, resume)
+from results_models import ROD_SOURCE, rod_model, rod_settings, two_block_model
+
+STATE_FIELDS = ("vertices", "points", "velocity", "acceleration", "stress", "rotation")
+
+
+def _max_relative(a: np.ndarray, b: np.ndarray) -> float:
+    scale = max(float(np.max(np.abs(b))), 1e-300)
+    return float(np.max(np.abs(a - b))) / scale
+
+
+def test_store_holds_the_same_histories_as_the_in_memory_result(tmp_path: Path) -> None:
+    settings = srdda.RunSettings(dt=1e-3, n_steps=57, record_every=2)
+    path = tmp_path / "run.h5"
+    res = srdda.run(two_block_model(), settings, recorders=[ResultsStore(path, settings, flush_every=7)])
+    stored = read_results(path)
+    # the file holds exact copies of the recorded arrays: equality, no tolerance
+    for name in ("step", "time", "centroid", "area", "rotation", "velocity", "stress", "measured_position",
+                 "measured_velocity", "iterations"):
+        np.testing.assert_array_equal(stored.array(name), res.array(name), err_msg=name)
+    np.testing.assert_array_equal(stored.array("energy"), res.array("energy"))
+    assert stored.energy_names == tuple(res.energy[0])
+    assert stored.status == "completed" and stored.settings == settings
+    assert stored.block_names == res.block_names
+    assert stored.array("vertices")[-1].tolist() == res.final_state.vertices.tolist()
+
+
+def test_stored_model_rebuilds_the_model_arrays(tmp_path: Path) -> None:
+    model = rod_model()
+    settings = rod_settings(n_steps=3)
+    path = tmp_path / "rod.h5"
+    srdda.run(model, settings, recorders=[ResultsStore(path, settings, model_text="# the model file")])
+    original, rebuilt = model.arrays(), model_arrays_from_file(path)
+    for name, value in vars(original).items():
+        if isinstance(value, np.ndarray):
+            np.testing.assert_array_equal(getattr(rebuilt, name), value, err_msg=name)
+    assert rebuilt.block_names == original.block_names
+    for t in (0.0, 0.3, 2.0):  # the table load survives the round trip
+        np.testing.assert_array_equal(rebuilt.loads[0](t), original.loads[0](t))
+    assert read_results(path).model_text == "# the model file"
+    with h5py.File(path) as f:
+        assert {"numpy", "h5py", "hdf5", "srdda", "python"} <= set(f["versions"].attrs)
+
+
+def test_a_callable_load_needs_the_model_to_resume(tmp_path: Path) -> None:
+    model = rod_model()
+    model.add_point_load([5.0, 0.05], lambda t: (0.0, -t))
+    settings = rod_settings(n_steps=4)
+    path = tmp_path / "f.h5"
+    srdda.run(model, settings, recorders=[ResultsStore(path, settings)])
+    with pytest.raises(ResultsFileError, match="Python function"):
+        resume(path)
+
+
+def test_not_a_results_file_is_a_clear_error(tmp_path: Path) -> None:
+    with h5py.File(tmp_path / "other.h5", "w") as f:
+        f["x"] = 1
+    with pytest.raises(ResultsFileError, match="not an srdda results file"):
+        read_results(tmp_path / "other.h5")
+    (tmp_path / "text.h5").write_text("hello")
+    with pytest.raises(ResultsFileError, match="cannot open"):
+        read_results(tmp_path / "text.h5")
+
+
+def test_contact_hook_appends_ragged_rows_at_its_interval(tmp_path: Path) -> None:
+    def provider(arrays, state):  # a synthetic contact list whose length changes with the step
+        n = state.step % 3
+        return {"normal_force": np.full(n, float(state.step)), "point": np.zeros((n, 2))}
+
+    settings = srdda.RunSettings(dt=1e-3, n_steps=20)
+    path = tmp_path / "c.h5"
+    srdda.run(two_block_model(), settings,
+              recorders=[ResultsStore(path, settings, flush_every=4, contact_provider=provider, contact_every=5)])
+    stored = read_results(path)
+    np.testing.assert_array_equal(stored.contacts["step"], [0, 5, 10, 15, 20])
+    for i, step in enumerate(stored.contacts["step"]):
+        c = stored.contacts_at(i)
+        assert len(c["normal_force"]) == step % 3 and np.all(c["normal_force"] == step)
+
+
+CHILD = textwrap.dedent('''
+    import sys
+    {source}
+    from srdda.io.results_store import ResultsStore
+    settings = srdda.RunSettings(dt=1e-3, n_steps={n_steps}, method="srdda", penalty=2e16)
+    def progress(step):
+        print(step, flush=True)
+    srdda.run(rod_model(), settings, progress=progress,
+              recorders=[ResultsStore(sys.argv[1], settings, flush_every={flush})])
+''')
+
+
+@pytest.mark.parametrize("method", ["dda1", "srdda"])
+def test_sigkill_leaves_every_flushed_step_and_resume_matches(tmp_path: Path, method: str) -> None:
+    n_steps, flush, kill_after = 1500, 25, 400
+    script = tmp_path / "child.py"
+    script.write_text(CHILD.format(source=ROD_SOURCE, n_steps=n_steps, flush=flush).replace('"srdda", penalty',
+                                                                                             f'"{method}", penalty'))
+    path = tmp_path / "killed.h5"
+    env = {**os.environ, "PYTHONPATH": str(Path(srdda.__file__).parents[1])}
+    child = subprocess.Popen([sys.executable, str(script), str(path)], stdout=subprocess.PIPE, text=True, env=env)
+    for line in child.stdout:  # kill the run once it is well past its first flushes
+        if int(line) >= kill_after:
+            os.kill(child.pid, signal.SIGKILL)
+            break
+    child.wait()
+    assert child.returncode == -signal.SIGKILL
+
+    killed = read_results(path)
+    n = len(killed.step)
+    assert killed.status == "running"  # it never finished
+    assert kill_after - flush <= n - 1 < n_steps
+    assert n % flush == 0  # whole flushes only (the first record is step 0)
+    np.testing.assert_array_equal(killed.step, np.arange(n))
+    assert np.all(np.isfinite(killed.velocity)) and np.all(np.isfinite(killed.vertices))
+
+    settings = rod_settings(method, n_steps)
+    reference = srdda.run(rod_model(), settings)
+    # flushed rows are the uninterrupted run's rows, bit for bit
+    np.testing.assert_array_equal(killed.velocity, reference.array("velocity")[:n])
+
+    resume(path)
+    resumed = read_results(path)
+    assert resumed.status == "completed"
+    np.testing.assert_array_equal(resumed.step, np.arange(n_steps + 1))
+    final = load_checkpoint(path, rod_model().arrays())
+    assert final.step == n_steps
+    # acceptance: the resumed run reaches the uninterrupted run's final state to 1e-12 relative
+    for name in STATE_FIELDS:
+        assert _max_relative(getattr(final, name), getattr(reference.final_state, name)) <= 1e-12, name
+    assert _max_relative(resumed.velocity, reference.array("velocity")) <= 1e-12
+    assert _max_relative(resumed.measured_position, reference.array("measured_position")) <= 1e-12
