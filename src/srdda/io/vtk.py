@@ -1,0 +1,147 @@
+"""ParaView files: VTU meshes per recorded step and PVD time series, written with meshio.
+
+Blocks are VTK polygon cells (one per block, grouped by vertex count as meshio
+needs) with cell data ``block``, ``material``, ``fixed``, ``velocity`` (vx, vy,
+0), ``angular_velocity``, ``strain_rate`` (εx, εy, γxy rates), ``stress`` (σx,
+σy, τxy), ``area`` and ``area_change`` (A/A0 - 1). Contacts are vertex cells
+at the contact point, or line cells from the point to its partner point when
+one is given, with ``normal_force``, ``shear_force``, ``normal`` and any other
+per-contact array. A step without contacts gives a valid empty VTU (written as
+ASCII: ParaView reads it, meshio's reader does not read empty meshes).
+"""
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+
+import meshio
+import numpy as np
+
+from .results_store import StoredResult, read_results
+
+__all__ = ["blocks_mesh", "contacts_mesh", "write_pvd", "write_vtu_series"]
+
+
+def _xyz(xy: np.ndarray) -> np.ndarray:
+    """2D points (n, 2) as the 3D points VTK wants."""
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    return np.column_stack([xy, np.zeros(len(xy))])
+
+
+def blocks_mesh(vertices: np.ndarray, block_ptr: np.ndarray, velocity: np.ndarray, stress: np.ndarray,
+                material: np.ndarray, area: np.ndarray, initial_area: np.ndarray,
+                fixed: np.ndarray | None = None) -> meshio.Mesh:
+    """All blocks of one step as polygon cells with cell data (see the module docstring).
+
+    Cells come grouped by vertex count; the ``block`` cell field gives each
+    cell's block index.
+    """
+    counts = np.diff(block_ptr)
+    nb = len(counts)
+    per_block = {
+        "block": np.arange(nb, dtype=np.int64),
+        "material": np.asarray(material, dtype=np.int64),
+        "fixed": np.zeros(nb, dtype=np.int64) if fixed is None else np.asarray(fixed, dtype=np.int64),
+        "velocity": np.column_stack([velocity[:, :2], np.zeros(nb)]),
+        "angular_velocity": velocity[:, 2],
+        "strain_rate": velocity[:, 3:6],
+        "stress": stress,
+        "area": area,
+        "area_change": area / initial_area - 1.0,
+    }
+    cells, cell_data = [], {name: [] for name in per_block}
+    for n in np.unique(counts):
+        blocks = np.flatnonzero(counts == n)
+        cells.append(("polygon", block_ptr[blocks][:, None] + np.arange(n)[None, :]))
+        for name, values in per_block.items():
+            cell_data[name].append(np.asarray(values)[blocks])
+    return meshio.Mesh(_xyz(vertices), cells, cell_data=cell_data)
+
+
+def contacts_mesh(contacts: Mapping[str, np.ndarray]) -> meshio.Mesh:
+    """Contacts of one step: ``point`` (n, 2) required, ``point_b`` (n, 2) optional (line cells).
+
+    Every other array whose first axis has n rows becomes cell data (2-vectors
+    such as ``normal`` are padded to 3D).
+    """
+    if "point" not in contacts:
+        raise ValueError("contacts need a 'point' array (n, 2): where each contact is")
+    pa = np.asarray(contacts["point"], dtype=float).reshape(-1, 2)
+    n = len(pa)
+    if "point_b" in contacts:
+        pb = np.asarray(contacts["point_b"], dtype=float).reshape(-1, 2)
+        points = _xyz(np.concatenate([pa, pb]))
+        cells = [("line", np.column_stack([np.arange(n), n + np.arange(n)]))]
+    else:
+        points = _xyz(pa)
+        cells = [("vertex", np.arange(n)[:, None])]
+    data = {}
+    for name, value in contacts.items():
+        if name in ("point", "point_b"):
+            continue
+        arr = np.asarray(value)
+        if arr.shape[:1] != (n,):
+            raise ValueError(f"contact array {name!r} has {arr.shape[:1]} rows, expected {n}")
+        if arr.ndim == 2 and arr.shape[1] == 2:
+            arr = _xyz(arr)
+        data[name] = [arr]
+    return meshio.Mesh(points, cells, cell_data=data)
+
+
+def _write(mesh: meshio.Mesh, path: Path) -> None:
+    empty = sum(len(c.data) for c in mesh.cells) == 0
+    meshio.write(path, mesh, file_format="vtu", binary=not empty)
+
+
+def write_pvd(path: str | Path, files: Sequence[str | Path], times: Sequence[float]) -> Path:
+    """A ParaView collection of ``files`` (paths relative to the PVD's folder) at ``times``."""
+    root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
+    coll = ET.SubElement(root, "Collection")
+    for f, t in zip(files, times, strict=True):
+        ET.SubElement(coll, "DataSet", timestep=repr(float(t)), group="", part="0", file=str(f))
+    path = Path(path)
+    ET.ElementTree(root).write(path, xml_declaration=True, encoding="utf-8")
+    return path
+
+
+ContactSeries = Callable[[int], Mapping[str, np.ndarray] | None]
+
+
+def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, every: int = 1,
+                     contacts: ContactSeries | None = None, prefix: str = "blocks") -> dict[str, Path]:
+    """VTU files of every ``every``-th recorded step (and the last) of a results file, and PVD collections.
+
+    ``contacts(i)`` may give the contact arrays of recorded step ``i``; by
+    default the contacts stored in the results file are used (at the steps
+    they were recorded). Returns the PVD paths (``blocks``, and ``contacts``
+    when there are any).
+    """
+    res = results if isinstance(results, StoredResult) else read_results(results)
+    if every < 1:
+        raise ValueError(f"every must be >= 1, got {every}")
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    if contacts is None and res.contacts:
+        index = {int(s): i for i, s in enumerate(res.contacts["step"])}
+        def contacts(i: int) -> Mapping[str, np.ndarray] | None:  # noqa: E306 - the stored contacts
+            j = index.get(int(res.step[i]))
+            return None if j is None else res.contacts_at(j)
+    area0 = res.area[0]
+    block_files, contact_files, block_times, contact_times = [], [], [], []
+    for i in sorted({*range(0, len(res.step), every), len(res.step) - 1}):
+        name = f"{prefix}_{int(res.step[i]):07d}.vtu"
+        _write(blocks_mesh(res.vertices[i], res.block_ptr, res.velocity[i], res.stress[i], res.block_material,
+                           res.area[i], area0, res.block_fixed), out / name)
+        block_files.append(name)
+        block_times.append(res.time[i])
+        c = contacts(i) if contacts is not None else None
+        if c is not None:
+            cname = f"contacts_{int(res.step[i]):07d}.vtu"
+            _write(contacts_mesh(c), out / cname)
+            contact_files.append(cname)
+            contact_times.append(res.time[i])
+    pvds = {"blocks": write_pvd(out / f"{prefix}.pvd", block_files, block_times)}
+    if contact_files:
+        pvds["contacts"] = write_pvd(out / "contacts.pvd", contact_files, contact_times)
+    return pvds
