@@ -1,0 +1,318 @@
+"""Figures of runs (matplotlib, Agg backend): any run, and the paper's figures per method.
+
+Every function takes recorded histories — an in-memory
+:class:`~srdda.simulation.Result` or a :class:`~srdda.io.results_store.StoredResult`
+— and returns a matplotlib ``Figure``; nothing is drawn on screen. The
+paper's figures put the three methods side by side (one column each, in the
+order of the ``results`` mapping):
+
+=============================  ===========================================
+:func:`fig_swing_trajectories`  Figs. 4 and 6: pendulum / rod trajectories,
+                                zoomed view of the offset, radial offset
+:func:`fig_wave_shapes`         Figs. 8-10: bar-chain shape at given steps
+:func:`fig_nunchaku`            Figs. 12, 13: hinge-point trajectories,
+                                angular velocities, point C of all methods
+:func:`fig_rockfall`            Fig. 15: trajectories of P1 and P2 over the
+                                slope
+=============================  ===========================================
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.collections import PolyCollection  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+__all__ = ["history", "quantity_names", "plot_blocks", "fig_model", "fig_trajectories", "fig_time_series",
+           "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index"]
+
+Results = Any  # Result or StoredResult: both have .array(name), .block_names, .method
+Background = tuple[np.ndarray, np.ndarray]  # (vertices, block_ptr) of blocks drawn grey (slopes, ground)
+
+ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "total")
+VELOCITY_COMPONENTS = ("vx", "vy", "omega", "exx_rate", "eyy_rate", "gxy_rate")
+STRESS_COMPONENTS = ("sxx", "syy", "sxy")
+
+
+def _energy_names(res: Results) -> tuple[str, ...]:
+    if hasattr(res, "energy_names"):
+        return tuple(res.energy_names)
+    return tuple(res.energy[0]) if res.energy else ENERGY_NAMES
+
+
+def history(res: Results, name: str) -> np.ndarray:
+    """A recorded quantity as an array (first axis = recorded step).
+
+    ``name`` is a history (``time``, ``centroid``, ``velocity``, ...), an energy
+    (``energy.kinetic``), a velocity component (``velocity.omega``, ``vx`` ...
+    see ``VELOCITY_COMPONENTS``) or a stress component (``stress.sxx``).
+    """
+    if "." not in name:
+        return np.asarray(res.array(name))
+    base, part = name.split(".", 1)
+    if base == "energy":
+        names = _energy_names(res)
+        if part not in names:
+            raise KeyError(f"no energy {part!r}; energies are {names}")
+        return np.asarray(res.array("energy"))[:, names.index(part)]
+    comps = {"velocity": VELOCITY_COMPONENTS, "stress": STRESS_COMPONENTS}.get(base)
+    if comps is None or part not in comps:
+        raise KeyError(f"unknown quantity {name!r}; try one of {quantity_names(res)}")
+    return np.asarray(res.array(base))[..., comps.index(part)]
+
+
+def quantity_names(res: Results) -> list[str]:
+    """Every name :func:`history` accepts for ``res``."""
+    return (["area", "rotation", "iterations"] + [f"velocity.{c}" for c in VELOCITY_COMPONENTS]
+            + [f"stress.{c}" for c in STRESS_COMPONENTS] + [f"energy.{e}" for e in _energy_names(res)])
+
+
+def step_index(res: Results, step: int) -> int:
+    """Row of the recorded step ``step`` (the nearest recorded one at or before it)."""
+    steps = np.asarray(res.array("step"))
+    i = int(np.searchsorted(steps, step, side="right")) - 1
+    if i < 0:
+        raise ValueError(f"step {step} precedes the first recorded step {steps[0]}")
+    return i
+
+
+def _method_label(name: str) -> str:
+    return {"dda0": "DDA0", "dda1": "DDA1", "srdda": "SRDDA"}.get(name, name)
+
+
+# -- any run --------------------------------------------------------------------
+def plot_blocks(ax: plt.Axes, vertices: np.ndarray, block_ptr: np.ndarray, values: np.ndarray | None = None,
+                cmap: str = "viridis", facecolor: str = "#c8d6e5", **kwargs: Any) -> PolyCollection:
+    """Draw blocks as polygons, coloured by ``values`` (one per block) when given."""
+    polys = [vertices[a:b] for a, b in zip(block_ptr[:-1], block_ptr[1:])]
+    coll = PolyCollection(polys, edgecolor=kwargs.pop("edgecolor", "k"), linewidth=kwargs.pop("linewidth", 0.6),
+                          facecolor=None if values is not None else facecolor, cmap=cmap, **kwargs)
+    if values is not None:
+        coll.set_array(np.asarray(values, dtype=float))
+    ax.add_collection(coll)
+    ax.autoscale_view()
+    ax.set_aspect("equal")
+    return coll
+
+
+def _block_values(res: Results, index: int, color: str | None) -> np.ndarray | None:
+    if color is None:
+        return None
+    if color == "speed":
+        v = history(res, "velocity")[index]
+        return np.hypot(v[:, 0], v[:, 1])
+    if color == "area_change":
+        area = history(res, "area")
+        return area[index] / area[0] - 1.0
+    return history(res, color)[index]
+
+
+def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails: bool = True) -> Figure:
+    """The blocks at recorded step ``index`` (needs the vertices history of a results file).
+
+    ``color``: ``speed``, ``area_change`` or any per-block quantity of
+    :func:`history` (e.g. ``velocity.omega``, ``stress.sxx``); ``trails`` draws
+    the measured points' paths so far.
+    """
+    if "vertices" not in getattr(res, "histories", {}):
+        raise ValueError("drawing the model needs the vertex history of a results file (srdda run -o FILE.h5)")
+    fig, ax = plt.subplots(figsize=(7, 5), layout="constrained")
+    verts = res.array("vertices")
+    index = index % len(verts)
+    values = _block_values(res, index, color)
+    coll = plot_blocks(ax, verts[index], res.block_ptr, values)
+    if values is not None:
+        fig.colorbar(coll, ax=ax, label=color)
+    if trails:
+        mp = history(res, "measured_position")
+        for k in range(mp.shape[1]):
+            ax.plot(mp[: index + 1, k, 0], mp[: index + 1, k, 1], lw=0.8, label=f"point {k}")
+    allv = verts.reshape(-1, 2)
+    pad = 0.05 * float(np.ptp(allv, axis=0).max() or 1.0)
+    ax.set_xlim(allv[:, 0].min() - pad, allv[:, 0].max() + pad)
+    ax.set_ylim(allv[:, 1].min() - pad, allv[:, 1].max() + pad)
+    ax.set(xlabel="x (m)", ylabel="y (m)",
+           title=f"{_method_label(res.method)}: step {int(res.array('step')[index])}, "
+                 f"t = {float(res.array('time')[index]):.4g} s")
+    return fig
+
+
+def fig_trajectories(res: Results, points: str = "measured", title: str | None = None) -> Figure:
+    """Paths of the measured points (``points="measured"``) or the block centroids (``"centroid"``)."""
+    key = {"measured": "measured_position", "centroid": "centroid"}[points]
+    xy = history(res, key)
+    fig, ax = plt.subplots(figsize=(6, 5), layout="constrained")
+    labels = (res.block_names if points == "centroid" else [f"point {k}" for k in range(xy.shape[1])])
+    for k in range(xy.shape[1]):
+        ax.plot(xy[:, k, 0], xy[:, k, 1], lw=1.0, label=labels[k])
+    ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal", title=title or f"{_method_label(res.method)}: {points}")
+    if xy.shape[1]:
+        ax.legend(fontsize="small")
+    return fig
+
+
+def fig_time_series(runs: Results | Mapping[str, Results], quantity: str, blocks: Sequence[int] | None = None,
+                    point: int | None = None) -> Figure:
+    """A recorded quantity against time, one line per block (or point), for one run or several."""
+    runs = runs if isinstance(runs, Mapping) else {_method_label(runs.method): runs}
+    fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
+    for label, res in runs.items():
+        t = history(res, "time")
+        y = history(res, quantity)
+        if y.ndim == 1:
+            ax.plot(t, y, label=label)
+            continue
+        if quantity in ("measured_position", "measured_velocity", "centroid"):
+            raise ValueError(f"{quantity} is a 2-vector: plot its components ({quantity}.x is not recorded); "
+                             "use fig_trajectories")
+        names = res.block_names
+        for b in (range(y.shape[1]) if blocks is None else blocks):
+            ax.plot(t, y[:, b], label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
+    ax.set(xlabel="time (s)", ylabel=quantity)
+    ax.legend(fontsize="small")
+    return fig
+
+
+# -- the paper's figures -----------------------------------------------------------
+def _columns(n: int, rows: int = 1, size: tuple[float, float] = (4.2, 4.0)) -> tuple[Figure, np.ndarray]:
+    fig, axes = plt.subplots(rows, n, figsize=(size[0] * n, size[1] * rows), layout="constrained", squeeze=False)
+    return fig, axes
+
+
+def _zoom_box(xy: np.ndarray, width: float) -> tuple[float, float, float, float]:
+    """A square window of side ``width`` around the lowest point of a path."""
+    i = int(np.argmin(xy[:, 1]))
+    x0, y0 = xy[i]
+    return x0 - width / 2, x0 + width / 2, y0 - width / 4, y0 + 3 * width / 4
+
+
+def _inset(ax: plt.Axes, paths: Sequence[np.ndarray], colors: Sequence[str], box: tuple[float, float, float, float],
+           ) -> plt.Axes:
+    ins = ax.inset_axes([0.32, 0.3, 0.36, 0.36])
+    for xy, c in zip(paths, colors):
+        ins.plot(xy[:, 0], xy[:, 1], color=c, lw=0.8)
+    ins.set_xlim(box[0], box[1])
+    ins.set_ylim(box[2], box[3])
+    ins.tick_params(labelsize=6)
+    ins.set_title("zoom", fontsize=7)
+    ax.indicate_inset_zoom(ins, edgecolor="0.4")
+    return ins
+
+
+def fig_swing_trajectories(results: Mapping[str, Results], pivot: Sequence[float] = (0.0, 0.0),
+                           points: Sequence[int] | None = None, zoom: float | None = None,
+                           title: str = "") -> Figure:
+    """Figs. 4 and 6: measured-point paths per method with a zoomed view, and their radial offset.
+
+    Top row: the paths (a pendulum's B; a rod's B and C) with an inset around
+    the lowest point, where DDA0's to-and-fro paths part. Bottom row: the
+    distance of each point from the pivot minus its initial value (m) against
+    time, which measures that offset (zero for an exact rigid swing).
+    """
+    colors = ["tab:blue", "tab:red", "tab:green", "tab:orange"]
+    fig, axes = _columns(len(results), rows=2)
+    pivot = np.asarray(pivot, dtype=float)
+    for col, (method, res) in enumerate(results.items()):
+        mp = history(res, "measured_position")
+        idx = range(mp.shape[1]) if points is None else points
+        paths = [mp[:, k] for k in idx]
+        ax = axes[0, col]
+        for k, xy, c in zip(idx, paths, colors):
+            ax.plot(xy[:, 0], xy[:, 1], color=c, lw=0.9, label=f"point {k}")
+        ax.plot(*pivot, "k^")
+        ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {_method_label(method)}")
+        reach = float(np.max(np.linalg.norm(paths[0] - pivot, axis=1)))
+        _inset(ax, paths, colors, _zoom_box(paths[0], zoom or 0.02 * reach))
+        ax.legend(fontsize="small", loc="upper right")
+        t = history(res, "time")
+        for k, xy, c in zip(idx, paths, colors):
+            r = np.linalg.norm(xy - pivot, axis=1)
+            axes[1, col].plot(t, r - r[0], color=c, lw=0.9, label=f"point {k}")
+        axes[1, col].set(xlabel="time (s)", ylabel="radial offset (m)")
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def fig_wave_shapes(results: Mapping[str, Results], steps: Sequence[int] = (300, 600, 900),
+                    blocks: Sequence[int] | None = None, title: str = "") -> Figure:
+    """Figs. 8-10: the bar chain's transverse displacement along x at each step, per method.
+
+    Rows are the steps, columns the methods; a bar's centroid gives one point.
+    """
+    fig, axes = _columns(len(results), rows=len(steps), size=(4.2, 2.4))
+    for col, (method, res) in enumerate(results.items()):
+        c = history(res, "centroid")
+        sel = slice(None) if blocks is None else np.asarray(blocks)
+        for row, step in enumerate(steps):
+            i = step_index(res, step)
+            ax = axes[row, col]
+            ax.plot(c[i][sel, 0], c[i][sel, 1] - c[0][sel, 1], "-o", ms=2, lw=1.0)
+            ax.axhline(0.0, color="0.7", lw=0.5)
+            ax.set(xlabel="x (m)", ylabel="v (m)",
+                   title=f"{_method_label(method)}, CS {int(res.array('step')[i])}")
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def fig_nunchaku(results: Mapping[str, Results], hinge_points: tuple[int, int] = (0, 1), tip_point: int = 2,
+                 zoom: float | None = None, title: str = "") -> tuple[Figure, Figure]:
+    """Figs. 12 and 13: hinge points B1, B2 per method with a zoom, the sticks' ω; point C of all methods.
+
+    Returns (Fig. 12: top row paths of B1 (blue) and B2 (red), bottom row the
+    angular velocity of each stick against time; Fig. 13: paths of C).
+    """
+    fig12, axes = _columns(len(results), rows=2)
+    for col, (method, res) in enumerate(results.items()):
+        mp = history(res, "measured_position")
+        paths = [mp[:, hinge_points[0]], mp[:, hinge_points[1]]]
+        ax = axes[0, col]
+        for xy, c, lab in zip(paths, ("tab:blue", "tab:red"), ("B1", "B2")):
+            ax.plot(xy[:, 0], xy[:, 1], color=c, lw=0.9, label=lab)
+        ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {_method_label(method)}")
+        reach = float(np.ptp(paths[0], axis=0).max() or 1.0)
+        _inset(ax, paths, ("tab:blue", "tab:red"), _zoom_box(paths[0], zoom or 0.05 * reach))
+        ax.legend(fontsize="small", loc="upper right")
+        t = history(res, "time")
+        omega = history(res, "velocity.omega")
+        for b, name in enumerate(res.block_names):
+            axes[1, col].plot(t, omega[:, b], lw=0.9, label=name)
+        axes[1, col].set(xlabel="time (s)", ylabel="ω (1/s)")
+        axes[1, col].legend(fontsize="small")
+    fig13, ax13 = plt.subplots(figsize=(6, 5), layout="constrained")
+    for method, res in results.items():
+        c = history(res, "measured_position")[:, tip_point]
+        ax13.plot(c[:, 0], c[:, 1], lw=0.9, label=_method_label(method))
+    ax13.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title="point C")
+    ax13.legend(fontsize="small")
+    if title:
+        fig12.suptitle(title)
+        fig13.suptitle(title)
+    return fig12, fig13
+
+
+def fig_rockfall(results: Mapping[str, Results], background: Background | None = None,
+                 points: tuple[int, int] = (0, 1), title: str = "") -> Figure:
+    """Fig. 15: paths of the stone's centroid P1 (blue) and vertex P2 (red) per method, over the slope."""
+    fig, axes = _columns(len(results), size=(5.0, 4.0))
+    for col, (method, res) in enumerate(results.items()):
+        ax = axes[0, col]
+        if background is not None:
+            plot_blocks(ax, background[0], background[1], facecolor="0.85", edgecolor="0.4")
+        mp = history(res, "measured_position")
+        for k, c, lab in zip(points, ("tab:blue", "tab:red"), ("P1", "P2")):
+            ax.plot(mp[:, k, 0], mp[:, k, 1], color=c, lw=0.8, label=lab)
+        ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {_method_label(method)}")
+        ax.legend(fontsize="small")
+        ax.autoscale_view()
+    if title:
+        fig.suptitle(title)
+    return fig
