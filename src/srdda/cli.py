@@ -16,7 +16,9 @@ from tqdm import tqdm
 
 from . import __version__
 from .integrators.methods import METHODS
+from .cli_results import animate_command, plot_command, resume_run, vtk_command
 from .io.modelfile import ModelFileError, load_model
+from .io.results_store import ResultsStore
 from .paper import EXAMPLES, relative_error, run_example
 from .simulation import Result, run
 from .solvers import available_solvers
@@ -55,22 +57,38 @@ def save_histories(result: Result, out: Path) -> Path:
 
 
 @main.command("run")
-@click.argument("model", type=click.Path(exists=True, dir_okay=False))
+@click.argument("model", type=click.Path(exists=True, dir_okay=False), required=False)
 @click.option("--method", type=click.Choice(METHODS), help="Override the model file's method.")
 @click.option("--steps", type=click.IntRange(min=0), help="Override the number of steps.")
 @click.option("--out", "out", type=click.Path(file_okay=False), default=None,
               help="Output folder (default: MODEL's name without suffix, beside it).")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def run_command(model: str, method: str | None, steps: int | None, out: str | None, quiet: bool) -> None:
-    """Run a model file and save its time histories."""
+@click.option("--resume", "resume_file", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="Continue the run of a results.h5 from its last flush (instead of MODEL).")
+@click.option("--flush-every", type=click.IntRange(min=1), default=100, show_default=True,
+              help="Recorded steps between flushes of results.h5 (what a killed run can lose).")
+def run_command(model: str | None, method: str | None, steps: int | None, out: str | None, quiet: bool,
+                resume_file: str | None, flush_every: int) -> None:
+    """Run a model file; write results.h5 (see srdda plot/animate/vtk) and its time histories."""
+    if resume_file is not None:
+        if model is not None:
+            raise click.UsageError("give either MODEL or --resume RESULTS, not both")
+        if resume_run(resume_file, quiet, flush_every) != "completed":
+            sys.exit(3)
+        return
+    if model is None:
+        raise click.UsageError("missing MODEL (or --resume RESULTS)")
     mdl, settings = _load(model)
     if method:
         settings = replace(settings, method=method)
     if steps is not None:
         settings = replace(settings, n_steps=steps)
     out_dir = Path(out) if out else Path(model).with_suffix("")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    store = ResultsStore(out_dir / "results.h5", settings, flush_every=flush_every,
+                         model_text=Path(model).read_text(encoding="utf-8"))
     with tqdm(total=settings.n_steps, disable=quiet, unit="step", desc=settings.method) as bar:
-        result = run(mdl, settings, progress=lambda _: bar.update(1))
+        result = run(mdl, settings, progress=lambda _: bar.update(1), recorders=[store])
     path = save_histories(result, out_dir)
     click.echo(f"{result.status}: {len(result.step)} recorded steps written to {path}")
     if not result.completed:
@@ -174,6 +192,10 @@ def write_tables_report(out: Path, documents: list[dict]) -> Path:
     path.write_text("\n".join(lines), encoding="utf-8")
     return path
 
+
+main.add_command(plot_command)
+main.add_command(animate_command)
+main.add_command(vtk_command)
 
 if __name__ == "__main__":
     main()

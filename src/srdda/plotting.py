@@ -30,7 +30,8 @@ import numpy as np  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-__all__ = ["history", "quantity_names", "plot_blocks", "fig_model", "fig_trajectories", "fig_time_series",
+__all__ = ["history", "quantity_names", "block_values", "method_label", "plot_blocks", "fig_model",
+           "fig_trajectories", "fig_time_series",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index"]
 
 Results = Any  # Result or StoredResult: both have .array(name), .block_names, .method
@@ -83,7 +84,8 @@ def step_index(res: Results, step: int) -> int:
     return i
 
 
-def _method_label(name: str) -> str:
+def method_label(name: str) -> str:
+    """The paper's name of a method (DDA0, DDA1, SRDDA)."""
     return {"dda0": "DDA0", "dda1": "DDA1", "srdda": "SRDDA"}.get(name, name)
 
 
@@ -102,7 +104,8 @@ def plot_blocks(ax: plt.Axes, vertices: np.ndarray, block_ptr: np.ndarray, value
     return coll
 
 
-def _block_values(res: Results, index: int, color: str | None) -> np.ndarray | None:
+def block_values(res: Results, index: int, color: str | None) -> np.ndarray | None:
+    """One value per block at recorded row ``index``: ``speed``, ``area_change`` or a :func:`history` name."""
     if color is None:
         return None
     if color == "speed":
@@ -126,7 +129,7 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     fig, ax = plt.subplots(figsize=(7, 5), layout="constrained")
     verts = res.array("vertices")
     index = index % len(verts)
-    values = _block_values(res, index, color)
+    values = block_values(res, index, color)
     coll = plot_blocks(ax, verts[index], res.block_ptr, values)
     if values is not None:
         fig.colorbar(coll, ax=ax, label=color)
@@ -139,7 +142,7 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     ax.set_xlim(allv[:, 0].min() - pad, allv[:, 0].max() + pad)
     ax.set_ylim(allv[:, 1].min() - pad, allv[:, 1].max() + pad)
     ax.set(xlabel="x (m)", ylabel="y (m)",
-           title=f"{_method_label(res.method)}: step {int(res.array('step')[index])}, "
+           title=f"{method_label(res.method)}: step {int(res.array('step')[index])}, "
                  f"t = {float(res.array('time')[index]):.4g} s")
     return fig
 
@@ -152,7 +155,7 @@ def fig_trajectories(res: Results, points: str = "measured", title: str | None =
     labels = (res.block_names if points == "centroid" else [f"point {k}" for k in range(xy.shape[1])])
     for k in range(xy.shape[1]):
         ax.plot(xy[:, k, 0], xy[:, k, 1], lw=1.0, label=labels[k])
-    ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal", title=title or f"{_method_label(res.method)}: {points}")
+    ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal", title=title or f"{method_label(res.method)}: {points}")
     if xy.shape[1]:
         ax.legend(fontsize="small")
     return fig
@@ -161,7 +164,7 @@ def fig_trajectories(res: Results, points: str = "measured", title: str | None =
 def fig_time_series(runs: Results | Mapping[str, Results], quantity: str, blocks: Sequence[int] | None = None,
                     point: int | None = None) -> Figure:
     """A recorded quantity against time, one line per block (or point), for one run or several."""
-    runs = runs if isinstance(runs, Mapping) else {_method_label(runs.method): runs}
+    runs = runs if isinstance(runs, Mapping) else {method_label(runs.method): runs}
     fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
     for label, res in runs.items():
         t = history(res, "time")
@@ -227,7 +230,7 @@ def fig_swing_trajectories(results: Mapping[str, Results], pivot: Sequence[float
         for k, xy, c in zip(idx, paths, colors):
             ax.plot(xy[:, 0], xy[:, 1], color=c, lw=0.9, label=f"point {k}")
         ax.plot(*pivot, "k^")
-        ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {_method_label(method)}")
+        ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {method_label(method)}")
         reach = float(np.max(np.linalg.norm(paths[0] - pivot, axis=1)))
         _inset(ax, paths, colors, _zoom_box(paths[0], zoom or 0.02 * reach))
         ax.legend(fontsize="small", loc="upper right")
@@ -257,7 +260,7 @@ def fig_wave_shapes(results: Mapping[str, Results], steps: Sequence[int] = (300,
             ax.plot(c[i][sel, 0], c[i][sel, 1] - c[0][sel, 1], "-o", ms=2, lw=1.0)
             ax.axhline(0.0, color="0.7", lw=0.5)
             ax.set(xlabel="x (m)", ylabel="v (m)",
-                   title=f"{_method_label(method)}, CS {int(res.array('step')[i])}")
+                   title=f"{method_label(method)}, CS {int(res.array('step')[i])}")
     if title:
         fig.suptitle(title)
     return fig
@@ -277,7 +280,7 @@ def fig_nunchaku(results: Mapping[str, Results], hinge_points: tuple[int, int] =
         ax = axes[0, col]
         for xy, c, lab in zip(paths, ("tab:blue", "tab:red"), ("B1", "B2")):
             ax.plot(xy[:, 0], xy[:, 1], color=c, lw=0.9, label=lab)
-        ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {_method_label(method)}")
+        ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {method_label(method)}")
         reach = float(np.ptp(paths[0], axis=0).max() or 1.0)
         _inset(ax, paths, ("tab:blue", "tab:red"), _zoom_box(paths[0], zoom or 0.05 * reach))
         ax.legend(fontsize="small", loc="upper right")
@@ -290,7 +293,7 @@ def fig_nunchaku(results: Mapping[str, Results], hinge_points: tuple[int, int] =
     fig13, ax13 = plt.subplots(figsize=(6, 5), layout="constrained")
     for method, res in results.items():
         c = history(res, "measured_position")[:, tip_point]
-        ax13.plot(c[:, 0], c[:, 1], lw=0.9, label=_method_label(method))
+        ax13.plot(c[:, 0], c[:, 1], lw=0.9, label=method_label(method))
     ax13.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title="point C")
     ax13.legend(fontsize="small")
     if title:
@@ -310,7 +313,7 @@ def fig_rockfall(results: Mapping[str, Results], background: Background | None =
         mp = history(res, "measured_position")
         for k, c, lab in zip(points, ("tab:blue", "tab:red"), ("P1", "P2")):
             ax.plot(mp[:, k, 0], mp[:, k, 1], color=c, lw=0.8, label=lab)
-        ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {_method_label(method)}")
+        ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {method_label(method)}")
         ax.legend(fontsize="small")
         ax.autoscale_view()
     if title:

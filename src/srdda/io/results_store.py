@@ -395,17 +395,32 @@ def load_checkpoint(path: str | Path, arrays: ModelArrays) -> State:
     return State(step=step, time=time, moments=arrays.moments(values["vertices"]), **values)
 
 
+def _resume_arrays(path: str | Path) -> ModelArrays:
+    """The stored model arrays; for Python-function loads, the model rebuilt from the stored model file text."""
+    try:
+        return model_arrays_from_file(path)
+    except ResultsFileError:
+        text = read_results(path).model_text
+        if text is None:
+            raise
+    import tomllib
+
+    from .modelfile import model_from_dict
+
+    return model_from_dict(tomllib.loads(text), source=f"model text stored in {path}")[0].arrays()
+
+
 def resume(path: str | Path, model: Model | ModelArrays | None = None, flush_every: int | None = None,
            progress: Callable[[int], None] | None = None, contact_provider: ContactProvider | None = None,
            ) -> Result:
     """Continue the run of a results file from its last checkpoint up to its last step, appending to it.
 
-    The model comes from the file unless given (a model with Python-function
-    loads must be given). Returns the in-memory :class:`Result` of the
+    The model comes from the file unless given: its stored arrays, or, when it
+    has loads given as Python functions, the stored model file text (a model
+    built in Python with such loads must be given). Returns the in-memory :class:`Result` of the
     continued part; the file then holds the whole run.
     """
-    arrays = model_arrays_from_file(path) if model is None else (
-        model.arrays() if isinstance(model, Model) else model)
+    arrays = _resume_arrays(path) if model is None else (model.arrays() if isinstance(model, Model) else model)
     with _open_read(path) as f:
         settings = RunSettings(**json.loads(f["settings"].attrs["json"]))
         last_step = int(f.attrs["last_step"])

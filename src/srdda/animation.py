@@ -1,0 +1,102 @@
+"""Animations of a results file: GIF (Pillow, always there) or MP4 (ffmpeg, optional).
+
+MP4 needs an ffmpeg executable: the one on PATH, or the one the optional
+extra ``pip install srdda[mp4]`` (imageio-ffmpeg) brings. Without it an
+``.mp4`` request writes a GIF beside it (same name, ``.gif``) and warns.
+"""
+from __future__ import annotations
+
+import shutil
+import warnings
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib import animation  # noqa: E402
+
+from .io.results_store import StoredResult, read_results  # noqa: E402
+from .plotting import block_values, method_label, history, plot_blocks  # noqa: E402
+
+__all__ = ["animate", "ffmpeg_path"]
+
+
+def ffmpeg_path() -> str | None:
+    """An ffmpeg executable: on PATH, else imageio-ffmpeg's (the ``srdda[mp4]`` extra); None if neither."""
+    found = shutil.which("ffmpeg")
+    if found:
+        return found
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        return None
+    return imageio_ffmpeg.get_ffmpeg_exe()
+
+
+def _frames(n_rows: int, max_frames: int) -> np.ndarray:
+    """Evenly spread recorded rows, always the first and the last."""
+    if n_rows <= max_frames:
+        return np.arange(n_rows)
+    return np.unique(np.linspace(0, n_rows - 1, max_frames).round().astype(int))
+
+
+def animate(results: StoredResult | str | Path, out: str | Path, fps: int = 20, max_frames: int = 200,
+            color: str | None = "speed", dpi: int = 80) -> Path:
+    """Write an animation of the blocks and the measured points' paths; returns the file written.
+
+    The suffix of ``out`` picks the format (``.gif`` or ``.mp4``); at most
+    ``max_frames`` recorded steps are shown, evenly spread over the run.
+    """
+    res = results if isinstance(results, StoredResult) else read_results(results)
+    out = Path(out)
+    if out.suffix.lower() not in (".gif", ".mp4"):
+        raise ValueError(f"animation file must end in .gif or .mp4, got {out.name!r}")
+    if fps < 1 or max_frames < 1:
+        raise ValueError("fps and max_frames must be >= 1")
+    writer: animation.AbstractMovieWriter
+    if out.suffix.lower() == ".mp4":
+        exe = ffmpeg_path()
+        if exe is None:
+            out = out.with_suffix(".gif")
+            warnings.warn(f"no ffmpeg found (install srdda[mp4] or put ffmpeg on PATH); writing {out.name} instead",
+                          stacklevel=2)
+        else:
+            matplotlib.rcParams["animation.ffmpeg_path"] = exe
+    writer = (animation.FFMpegWriter(fps=fps) if out.suffix.lower() == ".mp4" else animation.PillowWriter(fps=fps))
+
+    verts = history(res, "vertices")
+    mp = history(res, "measured_position")
+    steps, times = history(res, "step"), history(res, "time")
+    frames = _frames(len(steps), max_frames)
+    fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
+    values = block_values(res, 0, color)
+    coll = plot_blocks(ax, verts[0], res.block_ptr, values)
+    if values is not None:
+        all_values = np.concatenate([block_values(res, int(i), color) for i in frames])
+        coll.set_clim(float(all_values.min()), float(all_values.max()) or 1.0)
+        fig.colorbar(coll, ax=ax, label=color)
+    trails = [ax.plot([], [], lw=0.8)[0] for _ in range(mp.shape[1])]
+    allv = verts[frames].reshape(-1, 2)
+    pad = 0.05 * float(np.ptp(allv, axis=0).max() or 1.0)
+    ax.set_xlim(allv[:, 0].min() - pad, allv[:, 0].max() + pad)
+    ax.set_ylim(allv[:, 1].min() - pad, allv[:, 1].max() + pad)
+    ax.set(xlabel="x (m)", ylabel="y (m)")
+    ptr = res.block_ptr
+
+    def draw(i: int) -> list:
+        coll.set_verts([verts[i][a:b] for a, b in zip(ptr[:-1], ptr[1:])])
+        if values is not None:
+            coll.set_array(block_values(res, i, color))
+        for k, line in enumerate(trails):
+            line.set_data(mp[: i + 1, k, 0], mp[: i + 1, k, 1])
+        ax.set_title(f"{method_label(res.method)}: step {int(steps[i])}, t = {float(times[i]):.4g} s")
+        return [coll, *trails]
+
+    anim = animation.FuncAnimation(fig, draw, frames=[int(i) for i in frames], blit=False)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    anim.save(out, writer=writer, dpi=dpi)
+    plt.close(fig)
+    return out

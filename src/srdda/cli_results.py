@@ -1,0 +1,113 @@
+"""Command-line tools for results files: ``srdda plot``, ``srdda animate``, ``srdda vtk``, resuming a run."""
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import click
+from tqdm import tqdm
+
+from .io.results_store import ResultsFileError, StoredResult, read_results, resume
+
+__all__ = ["plot_command", "animate_command", "vtk_command", "resume_run"]
+
+RUN = click.Path(exists=True, dir_okay=False)
+
+
+def _read(path: str) -> StoredResult:
+    try:
+        return read_results(path)
+    except ResultsFileError as exc:
+        raise click.UsageError(str(exc)) from None
+
+
+def resume_run(path: str, quiet: bool = False, flush_every: int | None = None) -> str:
+    """Continue a results file's run to its last step (``srdda run --resume``); returns the final status."""
+    try:
+        stored = read_results(path)
+        last = int(stored.settings.n_steps)
+        done = int(stored.step[-1]) if len(stored.step) else 0
+        with tqdm(total=max(0, last - done), disable=quiet, unit="step", desc=f"resume {stored.method}") as bar:
+            result = resume(path, flush_every=flush_every, progress=lambda _: bar.update(1))
+    except ResultsFileError as exc:
+        raise click.UsageError(str(exc)) from None
+    final = read_results(path)
+    click.echo(f"{result.status}: {path} now holds steps {int(final.step[0])}..{int(final.step[-1])} "
+               f"({len(final.step)} recorded)")
+    return result.status
+
+
+@click.command("plot")
+@click.argument("run", type=RUN)
+@click.option("--what", type=click.Choice(["model", "trajectories", "centroids", "series"]), default="model",
+              show_default=True, help="The blocks at a step, measured-point or centroid paths, or a time series.")
+@click.option("--step", type=int, default=None, help="Recorded step to draw the model at (default: the last).")
+@click.option("--quantity", "quantities", multiple=True,
+              help="For --what series: e.g. energy.total, velocity.omega, area, stress.sxx (repeatable).")
+@click.option("--color", default="speed", show_default=True,
+              help="Block colour for --what model: speed, area_change, velocity.omega, stress.sxx, ... or none.")
+@click.option("-o", "--out", type=click.Path(dir_okay=False), default=None,
+              help="Image file (png, pdf, svg; default: RUN's name + _WHAT.png).")
+def plot_command(run: str, what: str, step: int | None, quantities: tuple[str, ...], color: str,
+                 out: str | None) -> None:
+    """Draw a results file RUN: the model at a step, trajectories or time series."""
+    from . import plotting
+
+    res = _read(run)
+    try:
+        if what == "model":
+            index = -1 if step is None else plotting.step_index(res, step)
+            figs = {"model": plotting.fig_model(res, index, None if color == "none" else color)}
+        elif what in ("trajectories", "centroids"):
+            figs = {what: plotting.fig_trajectories(res, "measured" if what == "trajectories" else "centroid")}
+        else:
+            if not quantities:
+                raise click.UsageError("--what series needs --quantity; one of: "
+                                       + ", ".join(plotting.quantity_names(res)))
+            figs = {q: plotting.fig_time_series(res, q) for q in quantities}
+    except (KeyError, ValueError) as exc:
+        raise click.UsageError(str(exc.args[0] if exc.args else exc)) from None
+    base = Path(out) if out else Path(run).with_name(f"{Path(run).stem}_{what}.png")
+    for name, fig in figs.items():
+        path = base if len(figs) == 1 else base.with_name(f"{base.stem}_{name.replace('.', '_')}{base.suffix}")
+        fig.savefig(path, dpi=120)
+        click.echo(f"wrote {path}")
+
+
+@click.command("animate")
+@click.argument("run", type=RUN)
+@click.option("-o", "--out", type=click.Path(dir_okay=False), required=True, help="Output .gif or .mp4.")
+@click.option("--fps", type=click.IntRange(min=1), default=20, show_default=True)
+@click.option("--frames", type=click.IntRange(min=1), default=200, show_default=True,
+              help="At most this many recorded steps, evenly spread.")
+@click.option("--color", default="speed", show_default=True, help="Block colour (as for plot) or none.")
+def animate_command(run: str, out: str, fps: int, frames: int, color: str) -> None:
+    """Animate a results file RUN into a GIF or MP4 (MP4 needs ffmpeg: srdda[mp4]; else GIF)."""
+    from .animation import animate
+
+    if Path(out).suffix.lower() not in (".gif", ".mp4"):
+        raise click.UsageError(f"-o/--out must end in .gif or .mp4, got {out!r}")
+    res = _read(run)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            path = animate(res, out, fps=fps, max_frames=frames, color=None if color == "none" else color)
+        except (KeyError, ValueError) as exc:
+            raise click.UsageError(str(exc.args[0] if exc.args else exc)) from None
+    for w in caught:
+        click.echo(f"warning: {w.message}", err=True)
+    click.echo(f"wrote {path}")
+
+
+@click.command("vtk")
+@click.argument("run", type=RUN)
+@click.option("-o", "--out", type=click.Path(file_okay=False), required=True, help="Output folder.")
+@click.option("--every", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Write every N-th recorded step (and the last).")
+def vtk_command(run: str, out: str, every: int) -> None:
+    """Write ParaView files (VTU per step, PVD series) of a results file RUN."""
+    from .io.vtk import write_vtu_series
+
+    pvds = write_vtu_series(_read(run), out, every=every)
+    for path in pvds.values():
+        click.echo(f"wrote {path}")
