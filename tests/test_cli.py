@@ -61,5 +61,6 @@ def test_paper_report_lists_every_row(tmp_path):
     res = CliRunner().invoke(main, ["paper", "rod", "--method", "dda0", "--report", str(tmp_path), "--quiet"])
     assert res.exit_code == 0, res.output
     text = (tmp_path / "report.md").read_text()
-    # Table 3 has 4 steps and Table 4 two directions: 6 rows for one method
-    assert text.count("| dda0 |") == 6 and "Table 4" in text
+    # Table 3 has 4 steps and Table 4 two directions: 6 rows, each with DDA0's value beside the paper's
+    rows = [line for line in text.splitlines() if line.startswith(("| area |", "| omega_max"))]
+    assert len(rows) == 6 and "### Table 4" in text and (tmp_path / "report.html").exists()

@@ -16,7 +16,7 @@ from tqdm import tqdm
 
 from . import __version__
 from .integrators.methods import METHODS
-from .cli_results import animate_command, plot_command, resume_run, vtk_command
+from .cli_results import animate_command, plot_command, report_paper, resume_run, vtk_command
 from .io.modelfile import ModelFileError, load_model
 from .io.results_store import ResultsStore
 from .paper import EXAMPLES, relative_error, run_example
@@ -140,12 +140,23 @@ def print_rows(rows: list[dict]) -> None:
 @click.option("--method", type=click.Choice([*METHODS, "all"]), default="all", show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document instead of tables.")
 @click.option("--report", "report_dir", type=click.Path(file_okay=False), default=None,
-              help="Also write a report (Markdown) of every table into this folder.")
+              help="Also write report.md/report.html with every table and figure (and the runs) into this folder.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def paper_command(example: str, method: str, as_json: bool, report_dir: str | None, quiet: bool) -> None:
     """Run one of the paper's examples and print its tables beside the paper's."""
     methods = list(METHODS) if method == "all" else [method]
     names = list(EXAMPLES) if example == "all" else [example]
+    if report_dir is not None:
+        documents, failed = report_paper(report_dir, names, methods, quiet or as_json)
+        for doc in documents:
+            if not as_json:
+                click.echo(f"== {EXAMPLES[doc['example']].title} ==")
+                print_rows(doc["rows"])
+        if as_json:
+            click.echo(json.dumps(documents[0] if len(documents) == 1 else documents, indent=1))
+        if failed:
+            sys.exit(3)
+        return
     documents = []
     for name in names:
         bars: dict[str, tqdm] = {}
@@ -168,29 +179,6 @@ def paper_command(example: str, method: str, as_json: bool, report_dir: str | No
             print_rows(rows)
     if as_json:
         click.echo(json.dumps(documents[0] if len(documents) == 1 else documents, indent=1))
-    if report_dir is not None:
-        path = write_tables_report(Path(report_dir), documents)
-        click.echo(f"report written to {path}", err=as_json)
-
-
-def write_tables_report(out: Path, documents: list[dict]) -> Path:
-    """Write every example's rows as Markdown tables (ours beside the paper's) to out/report.md."""
-    out.mkdir(parents=True, exist_ok=True)
-    lines = ["# srdda: the paper's examples, ours beside the paper's", "",
-             f"srdda {__version__}; every number below comes from runs made by this command.", ""]
-    for doc in documents:
-        lines += [f"## {EXAMPLES[doc['example']].title}", "",
-                  "| table | quantity | step | method | ours | paper | exact | RE ours | RE paper |",
-                  "|---|---|---|---|---|---|---|---|---|"]
-        for r in doc["rows"]:
-            re_paper = None if r["paper"] is None else relative_error(r["paper"], r["exact"])
-            lines.append(f"| {r['table']} | {r['quantity']} | {'-' if r['step'] is None else r['step']} | "
-                         f"{r['method']} | {_fmt(r['ours'])} | {_fmt(r['paper'])} | {_fmt(r['exact'])} | "
-                         f"{_pct(relative_error(r['ours'], r['exact']))} | {_pct(re_paper)} |")
-        lines.append("")
-    path = out / "report.md"
-    path.write_text("\n".join(lines), encoding="utf-8")
-    return path
 
 
 main.add_command(plot_command)

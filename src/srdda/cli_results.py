@@ -9,7 +9,7 @@ from tqdm import tqdm
 
 from .io.results_store import ResultsFileError, StoredResult, read_results, resume
 
-__all__ = ["plot_command", "animate_command", "vtk_command", "resume_run"]
+__all__ = ["plot_command", "animate_command", "vtk_command", "resume_run", "report_paper"]
 
 RUN = click.Path(exists=True, dir_okay=False)
 
@@ -35,6 +35,35 @@ def resume_run(path: str, quiet: bool = False, flush_every: int | None = None) -
     click.echo(f"{result.status}: {path} now holds steps {int(final.step[0])}..{int(final.step[-1])} "
                f"({len(final.step)} recorded)")
     return result.status
+
+
+def report_paper(directory: str, names: list[str], methods: list[str], quiet: bool = False,
+                 ) -> tuple[list[dict], bool]:
+    """Run paper examples and write the report (``srdda paper ... --report DIR``).
+
+    Returns the table documents ``{"example", "rows"}`` and whether any run,
+    table or figure failed (each failure is printed on stderr).
+    """
+    from .report import make_report
+
+    bars: dict[tuple[str, str], tqdm] = {}
+
+    def progress(example: str, method: str, step: int, total: int) -> None:
+        key = (example, method)
+        if key not in bars:
+            bars[key] = tqdm(total=total, desc=f"{example} {method}", unit="step", disable=quiet, leave=False)
+        bars[key].update(1)
+
+    try:
+        runs, (md, html) = make_report(directory, names, methods, progress)
+    finally:
+        for bar in bars.values():
+            bar.close()
+    for run_ in runs:
+        for err in run_.errors:
+            click.echo(f"error in {run_.name}: {err}", err=True)
+    click.echo(f"report written to {md} and {html}", err=True)
+    return [{"example": r.name, "rows": r.rows} for r in runs], any(r.errors for r in runs)
 
 
 @click.command("plot")

@@ -1,0 +1,333 @@
+"""The paper report: run the paper's examples, write Markdown and HTML with every table and figure.
+
+Everything in the report comes from runs made by :func:`make_report` itself
+(never from stored numbers): each example of :mod:`srdda.paper` is built and
+run under each method, each run is written to ``DIR/runs/<example>_<method>.h5``
+(a results file: ``srdda plot``/``animate``/``vtk`` work on it), the example's
+``tables(results)`` rows are laid out ours beside the paper's, and its figures
+are drawn by the maker registered for it in :data:`FIGURES`.
+
+Output: ``DIR/report.md`` (figures as ``DIR/figures/*.png``) and
+``DIR/report.html`` (self-contained: figures embedded as base64 PNG).
+"""
+from __future__ import annotations
+
+import base64
+import datetime
+import html
+import io
+import os
+import platform
+import shlex
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from . import __version__, plotting  # noqa: E402
+from .integrators.methods import METHODS  # noqa: E402
+from .io.results_store import ResultsStore  # noqa: E402
+from .model import Model  # noqa: E402
+from .simulation import Result, run  # noqa: E402
+
+__all__ = ["ExampleRun", "FIGURES", "register_figures", "run_examples", "write_report", "make_report",
+           "pivot_table"]
+
+FigureList = list[tuple[str, Figure]]  # (caption, figure)
+FigureMaker = Callable[[dict[str, Result], Model], FigureList]
+FIGURES: dict[str, FigureMaker] = {}
+
+
+def register_figures(name: str) -> Callable[[FigureMaker], FigureMaker]:
+    """Register the figure maker of paper example ``name`` (results per method, the example's model)."""
+    def deco(maker: FigureMaker) -> FigureMaker:
+        FIGURES[name] = maker
+        return maker
+    return deco
+
+
+@dataclass
+class ExampleRun:
+    """One example run under several methods: results, table rows, figures, timings, files."""
+
+    name: str
+    title: str
+    results: dict[str, Result]
+    rows: list[dict]
+    figures: FigureList
+    wall_seconds: dict[str, float]
+    files: dict[str, Path] = field(default_factory=dict)
+    errors: list[str] = field(default_factory=list)
+
+
+# -- figure makers -------------------------------------------------------------------
+def _pivot(model: Model) -> np.ndarray:
+    arrays = model.arrays()
+    return arrays.points[arrays.fixed_rows[0]] if len(arrays.fixed_rows) else np.zeros(2)
+
+
+def _fixed_blocks(model: Model) -> tuple[np.ndarray, np.ndarray] | None:
+    """Vertices and pointer of the fixed blocks (slope, ground) to draw behind paths."""
+    a = model.arrays()
+    keep = np.flatnonzero(a.block_fixed)
+    if len(keep) == 0:
+        return None
+    counts = np.diff(a.block_ptr)[keep]
+    verts = np.concatenate([a.vertices[a.block_ptr[b]:a.block_ptr[b + 1]] for b in keep])
+    return verts, np.concatenate([[0], np.cumsum(counts)])
+
+
+def _common(results: dict[str, Result]) -> FigureList:
+    """Figures every example gets: total energy and angular velocities per method."""
+    figs = [("Total energy (kinetic + gravity + elastic + springs) against time, per method: its drift is "
+             "numerical work.", plotting.fig_time_series(results, "energy.total"))]
+    figs.append(("Angular velocity of every block against time, per method.",
+                 plotting.fig_time_series(results, "velocity.omega")))
+    return figs
+
+
+@register_figures("pendulum")
+def _pendulum(results: dict[str, Result], model: Model) -> FigureList:
+    return [("Fig. 4: trajectories of point B by (a) DDA0, (b) DDA1, (c) SRDDA, zoomed at the lowest point; "
+             "bottom: B's distance from the pivot A minus its initial value.",
+             plotting.fig_swing_trajectories(results, pivot=_pivot(model)))]
+
+
+@register_figures("rod")
+def _rod(results: dict[str, Result], model: Model) -> FigureList:
+    return [("Fig. 6: trajectories of points B (centroid) and C (tip) by (a) DDA0, (b) DDA1, (c) SRDDA, zoomed "
+             "at the lowest point; bottom: distance from the pivot A minus its initial value.",
+             plotting.fig_swing_trajectories(results, pivot=_pivot(model)))]
+
+
+@register_figures("wave")
+def _wave(results: dict[str, Result], model: Model) -> FigureList:
+    return [(f"Fig. {8 + i}: the bar chain's transverse displacement at CS {s} "
+             f"({i + 1} period{'s' if i else ''} of the driving sine).",
+             plotting.fig_wave_shapes(results, steps=(s,))) for i, s in enumerate((300, 600, 900))]
+
+
+@register_figures("nunchaku")
+def _nunchaku(results: dict[str, Result], model: Model) -> FigureList:
+    fig12, fig13 = plotting.fig_nunchaku(results)
+    return [("Fig. 12: trajectories of the hinge points B1 (blue) and B2 (red), zoomed; bottom: angular "
+             "velocity of each stick.", fig12),
+            ("Fig. 13: trajectories of point C by DDA0, DDA1 and SRDDA.", fig13)]
+
+
+@register_figures("rockfall")
+def _rockfall(results: dict[str, Result], model: Model) -> FigureList:
+    return [("Fig. 15: trajectories of P1 (centroid, blue) and P2 (vertex, red) by (a) DDA0, (b) DDA1, "
+             "(c) SRDDA.", plotting.fig_rockfall(results, background=_fixed_blocks(model)))]
+
+
+def _generic(results: dict[str, Result], model: Model) -> FigureList:
+    first = next(iter(results.values()))
+    return [(f"Measured-point trajectories ({plotting.method_label(m)}).",
+             plotting.fig_trajectories(r, "measured" if np.asarray(first.array("measured_position")).shape[1]
+                                       else "centroid")) for m, r in results.items()]
+
+
+# -- running -------------------------------------------------------------------------
+def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = METHODS,
+                 runs_dir: str | Path | None = None,
+                 progress: Callable[[str, str, int, int], None] | None = None) -> list[ExampleRun]:
+    """Run paper examples (all registered ones by default) under ``methods``; tables and figures.
+
+    A run that diverges or a table/figure that fails is reported in the
+    example's ``errors`` instead of stopping the others. ``progress(example,
+    method, step, n_steps)`` is called after every step.
+    """
+    from .paper import EXAMPLES, get_example
+    from .paper.registry import examples_dir
+
+    out = []
+    for name in (list(EXAMPLES) if names is None else names):
+        example = get_example(name)
+        results: dict[str, Result] = {}
+        wall: dict[str, float] = {}
+        files: dict[str, Path] = {}
+        errors: list[str] = []
+        model = None
+        for method in methods:
+            model, settings = example.build(method)
+            recorders = []
+            if runs_dir is not None:
+                files[method] = Path(runs_dir) / f"{name}_{method}.h5"
+                files[method].parent.mkdir(parents=True, exist_ok=True)
+                text = ((examples_dir() / "paper" / example.model_file).read_text(encoding="utf-8")
+                        if example.model_file else None)
+                recorders.append(ResultsStore(files[method], settings, flush_every=500, model_text=text))
+            callback = None if progress is None else (
+                lambda step, m=method, n=settings.n_steps: progress(name, m, step, n))
+            start = time.perf_counter()
+            results[method] = run(model, settings, progress=callback, recorders=recorders)
+            wall[method] = time.perf_counter() - start
+            if not results[method].completed:
+                errors.append(f"{method}: {results[method].status}")
+        rows, figures = [], []
+        try:
+            rows = example.tables(results)
+        except Exception as exc:  # a diverged run may lack the steps a table needs: say so in the report
+            errors.append(f"tables: {type(exc).__name__}: {exc}")
+        try:
+            figures = FIGURES.get(name, _generic)(results, model) + _common(results)
+        except Exception as exc:
+            errors.append(f"figures: {type(exc).__name__}: {exc}")
+        out.append(ExampleRun(name, example.title, results, rows, figures, wall, files, errors))
+    return out
+
+
+# -- tables ---------------------------------------------------------------------------
+def _decimals(paper: float | None) -> int:
+    if paper is None:
+        return 6
+    text = repr(float(paper))
+    return max(6, len(text.split(".")[1])) if "." in text and "e" not in text else 6
+
+
+def _re(value: float | None, exact: float | None) -> str:
+    if value is None or exact is None or exact == 0:
+        return ""
+    return f" ({100 * (value - exact) / exact:+.4f}%)"
+
+
+def pivot_table(rows: Sequence[dict], methods: Sequence[str]) -> tuple[list[str], list[list[str]]]:
+    """Rows of one paper table laid out as quantity, CS, exact, then ours | paper per method.
+
+    Values carry two more decimals than the paper prints; the relative error
+    to the exact value follows in parentheses where there is one.
+    """
+    keys: dict[tuple[str, object], dict] = {}
+    for r in rows:
+        entry = keys.setdefault((r["quantity"], r["step"]), {"exact": r["exact"]})
+        entry[r["method"]] = r
+    header = ["quantity", "CS", "exact"]
+    for m in methods:
+        header += [f"{plotting.method_label(m)} ours", f"{plotting.method_label(m)} paper"]
+    body = []
+    for (quantity, step), entry in keys.items():
+        exact = entry["exact"]
+        line = [str(quantity), "" if step is None else str(step), "" if exact is None else f"{exact:.6f}"]
+        for m in methods:
+            r = entry.get(m)
+            if r is None:
+                line += ["", ""]
+                continue
+            d = _decimals(r["paper"]) + 2
+            line.append(f"{r['ours']:.{d}f}{_re(r['ours'], exact)}")
+            line.append("" if r["paper"] is None else f"{repr(float(r['paper']))}{_re(r['paper'], exact)}")
+        body.append(line)
+    return header, body
+
+
+def _tables(run_: ExampleRun) -> dict[str, list[dict]]:
+    grouped: dict[str, list[dict]] = {}
+    for r in run_.rows:
+        grouped.setdefault(r["table"], []).append(r)
+    return grouped
+
+
+# -- writing ---------------------------------------------------------------------------
+def _png(fig: Figure, dpi: int = 100) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def _machine() -> str:
+    return (f"{platform.platform()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+            f"numpy {np.__version__}, srdda {__version__}")
+
+
+def _md_table(header: list[str], body: list[list[str]]) -> str:
+    def cell(s: str) -> str:
+        return s.replace("|", "\\|")
+    lines = ["| " + " | ".join(cell(h) for h in header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(cell(c) for c in row) + " |" for row in body]
+    return "\n".join(lines)
+
+
+def _html_table(header: list[str], body: list[list[str]]) -> str:
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    rows = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in body)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
+
+
+def _runs_table(run_: ExampleRun) -> tuple[list[str], list[list[str]]]:
+    header = ["method", "status", "recorded steps", "last step", "wall time (s)", "results file"]
+    body = []
+    for m, res in run_.results.items():
+        body.append([plotting.method_label(m), res.status, str(len(res.step)), str(res.step[-1] if res.step else ""),
+                     f"{run_.wall_seconds.get(m, float('nan')):.2f}",
+                     str(run_.files[m].name) if m in run_.files else ""])
+    return header, body
+
+
+CSS = ("body{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em}"
+       "table{border-collapse:collapse;margin:1em 0;font-size:90%}"
+       "td,th{border:1px solid #bbb;padding:3px 6px;text-align:right}th{background:#eee}"
+       "td:first-child{text-align:left}img{max-width:100%}.err{color:#a00}figcaption{font-size:90%}")
+
+
+def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str | None = None,
+                 total_seconds: float | None = None) -> tuple[Path, Path]:
+    """Write ``report.md`` (+ ``figures/``) and a self-contained ``report.html`` of ``runs``."""
+    out = Path(directory)
+    (out / "figures").mkdir(parents=True, exist_ok=True)
+    command = command or " ".join(shlex.quote(a) for a in ["srdda", *sys.argv[1:]])
+    stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    intro = (f"Every number and figure below comes from runs made by `{command}` on {stamp} "
+             f"(machine: {_machine()}). 'ours' is this run, 'paper' is Fan, Zheng & Zhao (2017); "
+             "relative errors to the exact value are in parentheses.")
+    if total_seconds is not None:
+        intro += f" Total wall time: {total_seconds:.1f} s."
+    md = ["# srdda: the paper's examples reproduced", "", intro, ""]
+    hb = [f"<h1>srdda: the paper's examples reproduced</h1><p>{html.escape(intro)}</p>"]
+    for run_ in runs:
+        methods = list(run_.results)
+        md += [f"## {run_.title}", ""]
+        hb.append(f"<h2>{html.escape(run_.title)}</h2>")
+        header, body = _runs_table(run_)
+        md += [_md_table(header, body), ""]
+        hb.append(_html_table(header, body))
+        for err in run_.errors:
+            md += [f"**Error:** {err}", ""]
+            hb.append(f"<p class='err'>Error: {html.escape(err)}</p>")
+        for table, rows in _tables(run_).items():
+            header, body = pivot_table(rows, methods)
+            md += [f"### {table}", "", _md_table(header, body), ""]
+            hb.append(f"<h3>{html.escape(table)}</h3>{_html_table(header, body)}")
+        for i, (caption, fig) in enumerate(run_.figures):
+            png = _png(fig)
+            name = f"{run_.name}_{i + 1}.png"
+            (out / "figures" / name).write_bytes(png)
+            md += [f"![{caption}](figures/{name})", "", f"*{caption}*", ""]
+            data = base64.b64encode(png).decode("ascii")
+            hb.append(f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(caption)}'>"
+                      f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+    md_path, html_path = out / "report.md", out / "report.html"
+    md_path.write_text("\n".join(md), encoding="utf-8")
+    html_path.write_text("<!doctype html><html><head><meta charset='utf-8'><title>srdda report</title>"
+                         f"<style>{CSS}</style></head><body>{''.join(hb)}</body></html>", encoding="utf-8")
+    return md_path, html_path
+
+
+def make_report(directory: str | Path, names: Sequence[str] | None = None, methods: Sequence[str] = METHODS,
+                progress: Callable[[str, str, int, int], None] | None = None,
+                command: str | None = None) -> tuple[list[ExampleRun], tuple[Path, Path]]:
+    """Run the examples (results files under ``DIR/runs``) and write the report into ``directory``."""
+    start = time.perf_counter()
+    runs = run_examples(names, methods, Path(directory) / "runs", progress)
+    paths = write_report(directory, runs, command, time.perf_counter() - start)
+    return runs, paths

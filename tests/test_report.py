@@ -1,0 +1,70 @@
+"""The paper report: tables laid out ours beside the paper's, figures embedded, numbers from its own runs."""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import srdda
+from srdda.io.results_store import read_results
+from srdda.paper import EXAMPLES, Example
+from srdda.report import make_report, pivot_table
+from results_models import rod_model, rod_settings
+
+METHODS = ("dda0", "dda1", "srdda")
+
+
+def _stub_tables(results):
+    """Area of the rod at step 100 against a made-up 'paper' value, and ω at the last step (no paper value)."""
+    rows = []
+    for m, res in results.items():
+        rows.append({"table": "Table S1", "quantity": "area", "step": 100, "method": m,
+                     "ours": float(res.area[100][0]), "paper": 1.000093, "exact": 1.0})
+        rows.append({"table": "Table S2", "quantity": "omega", "step": None, "method": m,
+                     "ours": float(res.velocity[-1][0, 2]), "paper": None, "exact": None})
+    return rows
+
+
+@pytest.fixture
+def stub_examples(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    build = lambda method: (rod_model(), rod_settings(method, n_steps=150))  # noqa: E731
+    monkeypatch.setitem(EXAMPLES, "stubrod", Example("stubrod", "Stub rod", _stub_tables, builder=build))
+
+    def broken(results):
+        raise KeyError("step 9999 was not recorded")
+
+    monkeypatch.setitem(EXAMPLES, "broken", Example("broken", "Broken tables", broken, builder=build))
+    return ["stubrod", "broken"]
+
+
+def test_report_is_written_from_its_own_runs(tmp_path: Path, stub_examples: list[str]) -> None:
+    runs, (md, html) = make_report(tmp_path, stub_examples, METHODS, command="srdda paper test --report x")
+    text = md.read_text()
+    assert "## Stub rod" in text and "### Table S1" in text and "### Table S2" in text
+    # every 'ours' number of the report is the value in the run's own results file
+    for m in METHODS:
+        stored = read_results(tmp_path / "runs" / f"stubrod_{m}.h5")
+        area = stored.area[100][0]
+        assert f"{area:.8f}" in text  # the paper prints 6 decimals; the report shows 2 more
+    header = [line for line in text.splitlines() if line.startswith("| quantity")][0]
+    assert header.count("ours") == 3 and header.count("paper") == 3
+    # figures: PNG files for Markdown, base64 images in the self-contained HTML, one per figure
+    n_fig = len(runs[0].figures)
+    assert n_fig >= 2
+    assert len(list((tmp_path / "figures").glob("stubrod_*.png"))) == n_fig
+    html_text = html.read_text()
+    assert len(re.findall(r"src='data:image/png;base64,", html_text)) == len(list((tmp_path / "figures").glob("*.png")))
+    # a failing table is reported, not fatal
+    assert runs[1].errors and "step 9999" in runs[1].errors[0]
+    assert "Error:" in text and "step 9999" in html_text
+
+
+def test_pivot_table_puts_ours_beside_the_paper() -> None:
+    rows = [{"table": "T", "quantity": "w", "step": None, "method": m, "ours": o, "paper": p, "exact": 2.0}
+            for m, o, p in (("dda0", 1.9, 1.95), ("srdda", 2.002, 2.1))]
+    header, body = pivot_table(rows, ["dda0", "srdda"])
+    assert header == ["quantity", "CS", "exact", "DDA0 ours", "DDA0 paper", "SRDDA ours", "SRDDA paper"]
+    assert body == [["w", "", "2.000000", "1.90000000 (-5.0000%)", "1.95 (-2.5000%)",
+                     "2.00200000 (+0.1000%)", "2.1 (+5.0000%)"]]
