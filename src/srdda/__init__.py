@@ -16,11 +16,12 @@ from .integrators import METHODS, Method, TimeScheme, method_preset
 from .model import Load, Material, Model, ModelError
 from .simulation import DivergenceError, Result, RunSettings, State, run
 from .solvers import available_solvers, get_solver
+from .io.results_store import ResultsStore, StoredResult, read_results, resume
 
 __version__ = "0.1.0"
 
 __all__ = [
     "METHODS", "DivergenceError", "Load", "Material", "Method", "Model", "ModelError", "PolygonError",
     "Result", "RunSettings", "State", "TimeScheme", "available_solvers", "block_moments", "get_solver",
-    "method_preset", "run", "__version__",
+    "method_preset", "run", "__version__", "ResultsStore", "StoredResult", "read_results", "resume",
 ]
