@@ -41,6 +41,18 @@ def test_store_holds_the_same_histories_as_the_in_memory_result(tmp_path: Path) 
     assert stored.array("vertices")[-1].tolist() == res.final_state.vertices.tolist()
 
 
+def test_a_model_without_points_is_stored(tmp_path: Path) -> None:
+    m = srdda.Model(gravity=(0.0, -9.81))
+    m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+    settings = srdda.RunSettings(dt=1e-3, n_steps=5)
+    srdda.run(m, settings, recorders=[ResultsStore(tmp_path / "p.h5", settings, flush_every=2)])
+    stored = read_results(tmp_path / "p.h5")
+    assert stored.measured_position.shape == (6, 0, 2) and stored.completed
+    resume(tmp_path / "p.h5")  # nothing left to run: the file stays complete
+    assert read_results(tmp_path / "p.h5").step.tolist() == list(range(6))
+
+
 def test_stored_model_rebuilds_the_model_arrays(tmp_path: Path) -> None:
     model = rod_model()
     settings = rod_settings(n_steps=3)

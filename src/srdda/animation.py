@@ -56,16 +56,19 @@ def animate(results: StoredResult | str | Path, out: str | Path, fps: int = 20, 
         raise ValueError(f"animation file must end in .gif or .mp4, got {out.name!r}")
     if fps < 1 or max_frames < 1:
         raise ValueError("fps and max_frames must be >= 1")
-    writer: animation.AbstractMovieWriter
-    if out.suffix.lower() == ".mp4":
-        exe = ffmpeg_path()
-        if exe is None:
-            out = out.with_suffix(".gif")
-            warnings.warn(f"no ffmpeg found (install srdda[mp4] or put ffmpeg on PATH); writing {out.name} instead",
-                          stacklevel=2)
-        else:
-            matplotlib.rcParams["animation.ffmpeg_path"] = exe
-    writer = (animation.FFMpegWriter(fps=fps) if out.suffix.lower() == ".mp4" else animation.PillowWriter(fps=fps))
+    exe = ffmpeg_path() if out.suffix.lower() == ".mp4" else None
+    if out.suffix.lower() == ".mp4" and exe is None:
+        out = out.with_suffix(".gif")
+        warnings.warn(f"no ffmpeg found (install srdda[mp4] or put ffmpeg on PATH); writing {out.name} instead",
+                      stacklevel=2)
+    with matplotlib.rc_context({"animation.ffmpeg_path": exe} if exe else {}):
+        _write_animation(res, out, fps, max_frames, color, dpi)
+    return out
+
+
+def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, color: str | None, dpi: int) -> None:
+    """Draw and save the frames with the writer the suffix of ``out`` picks."""
+    writer = animation.FFMpegWriter(fps=fps) if out.suffix.lower() == ".mp4" else animation.PillowWriter(fps=fps)
 
     verts = history(res, "vertices")
     mp = history(res, "measured_position")
@@ -99,4 +102,3 @@ def animate(results: StoredResult | str | Path, out: str | Path, fps: int = 20, 
     out.parent.mkdir(parents=True, exist_ok=True)
     anim.save(out, writer=writer, dpi=dpi)
     plt.close(fig)
-    return out

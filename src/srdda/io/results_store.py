@@ -83,9 +83,10 @@ def _append(group: h5py.Group, name: str, rows: np.ndarray, chunk_rows: int) -> 
     """Append ``rows`` (first axis = new rows) to a resizable dataset, creating it if needed."""
     rows = np.asarray(rows)
     if name not in group:
-        group.create_dataset(name, shape=(0, *rows.shape[1:]), maxshape=(None, *rows.shape[1:]),
-                             dtype=rows.dtype, chunks=(_chunk_rows(rows.shape[1:], rows.dtype.itemsize, chunk_rows),
-                                                       *rows.shape[1:]))
+        row = rows.shape[1:]  # an empty axis (no measured points, say) cannot be chunked: leave it growable
+        group.create_dataset(name, shape=(0, *row), maxshape=(None, *(d if d else None for d in row)),
+                             dtype=rows.dtype, chunks=(_chunk_rows(row, rows.dtype.itemsize, chunk_rows),
+                                                       *(max(d, 1) for d in row)))
     ds = group[name]
     n = ds.shape[0]
     ds.resize(n + len(rows), axis=0)
