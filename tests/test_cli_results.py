@@ -47,6 +47,8 @@ def test_plot_commands_write_images(rod_run: Path, tmp_path: Path) -> None:
         result = runner.invoke(main, ["plot", str(rod_run), *args, "-o", str(out)])
         assert result.exit_code == 0, result.output
         assert Image.open(out).size[0] > 100
+    folder = runner.invoke(main, ["plot", str(rod_run.parent), "--what", "centroids"])  # srdda run's folder
+    assert folder.exit_code == 0 and (rod_run.parent / "results_centroids.png").exists(), folder.output
     bad = runner.invoke(main, ["plot", str(rod_run), "--what", "series", "--quantity", "velocity.spin"])
     assert bad.exit_code == 2 and "unknown quantity 'velocity.spin'" in bad.output
     (tmp_path / "x.h5").write_text("not hdf5")

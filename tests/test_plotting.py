@@ -120,6 +120,13 @@ def test_any_run_model_trajectories_and_time_series(tmp_path) -> None:
     fig = plotting.fig_time_series({"a": res, "b": res}, "energy.total")
     assert len(_data_lines(fig.axes[0])) == 2
     _check(fig, 1)
+    fig = plotting.fig_time_series(res, "measured_position.y")
+    lines = _data_lines(fig.axes[0])
+    assert len(lines) == 2 and lines[1].get_label() == "point 1"
+    np.testing.assert_array_equal(lines[1].get_ydata(), res.measured_position[:, 1, 1])
+    _check(fig, 1)
+    with pytest.raises(ValueError, match="plot centroid.x"):
+        plotting.fig_time_series(res, "centroid")
     with pytest.raises(KeyError, match="unknown quantity"):
         plotting.history(res, "velocity.nope")
     with pytest.raises(ValueError, match="vertex history"):

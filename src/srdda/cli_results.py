@@ -11,10 +11,13 @@ from .io.results_store import ResultsFileError, StoredResult, read_results, resu
 
 __all__ = ["plot_command", "animate_command", "vtk_command", "resume_run", "report_paper"]
 
-RUN = click.Path(exists=True, dir_okay=False)
+RUN = click.Path(exists=True)
 
 
 def _read(path: str) -> StoredResult:
+    """The results file RUN, or RUN/results.h5 when RUN is the output folder of ``srdda run``."""
+    if Path(path).is_dir():
+        path = str(Path(path) / "results.h5")
     try:
         return read_results(path)
     except ResultsFileError as exc:
@@ -79,7 +82,7 @@ def report_paper(directory: str, names: list[str], methods: list[str], quiet: bo
               help="Image file (png, pdf, svg; default: RUN's name + _WHAT.png).")
 def plot_command(run: str, what: str, step: int | None, quantities: tuple[str, ...], color: str,
                  out: str | None) -> None:
-    """Draw a results file RUN: the model at a step, trajectories or time series."""
+    """Draw a results file RUN (or srdda run's output folder): the model at a step, trajectories or time series."""
     from . import plotting
 
     res = _read(run)
@@ -96,7 +99,7 @@ def plot_command(run: str, what: str, step: int | None, quantities: tuple[str, .
             figs = {q: plotting.fig_time_series(res, q) for q in quantities}
     except (KeyError, ValueError) as exc:
         raise click.UsageError(str(exc.args[0] if exc.args else exc)) from None
-    base = Path(out) if out else Path(run).with_name(f"{Path(run).stem}_{what}.png")
+    base = Path(out) if out else Path(res.path).with_name(f"{Path(res.path).stem}_{what}.png")
     for name, fig in figs.items():
         path = base if len(figs) == 1 else base.with_name(f"{base.stem}_{name.replace('.', '_')}{base.suffix}")
         fig.savefig(path, dpi=120)

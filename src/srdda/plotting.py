@@ -40,6 +40,7 @@ Background = tuple[np.ndarray, np.ndarray]  # (vertices, block_ptr) of blocks dr
 ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "total")
 VELOCITY_COMPONENTS = ("vx", "vy", "omega", "exx_rate", "eyy_rate", "gxy_rate")
 STRESS_COMPONENTS = ("sxx", "syy", "sxy")
+XY = ("x", "y")
 
 
 def _energy_names(res: Results) -> tuple[str, ...]:
@@ -53,7 +54,8 @@ def history(res: Results, name: str) -> np.ndarray:
 
     ``name`` is a history (``time``, ``centroid``, ``velocity``, ...), an energy
     (``energy.kinetic``), a velocity component (``velocity.omega``, ``vx`` ...
-    see ``VELOCITY_COMPONENTS``) or a stress component (``stress.sxx``).
+    see ``VELOCITY_COMPONENTS``), a stress component (``stress.sxx``) or a
+    coordinate of a 2-vector history (``measured_position.y``, ``centroid.x``).
     """
     if "." not in name:
         return np.asarray(res.array(name))
@@ -63,7 +65,8 @@ def history(res: Results, name: str) -> np.ndarray:
         if part not in names:
             raise KeyError(f"no energy {part!r}; energies are {names}")
         return np.asarray(res.array("energy"))[:, names.index(part)]
-    comps = {"velocity": VELOCITY_COMPONENTS, "stress": STRESS_COMPONENTS}.get(base)
+    comps = {"velocity": VELOCITY_COMPONENTS, "stress": STRESS_COMPONENTS, "centroid": XY,
+             "measured_position": XY, "measured_velocity": XY}.get(base)
     if comps is None or part not in comps:
         raise KeyError(f"unknown quantity {name!r}; try one of {quantity_names(res)}")
     return np.asarray(res.array(base))[..., comps.index(part)]
@@ -72,7 +75,8 @@ def history(res: Results, name: str) -> np.ndarray:
 def quantity_names(res: Results) -> list[str]:
     """Every name :func:`history` accepts for ``res``."""
     return (["area", "rotation", "iterations"] + [f"velocity.{c}" for c in VELOCITY_COMPONENTS]
-            + [f"stress.{c}" for c in STRESS_COMPONENTS] + [f"energy.{e}" for e in _energy_names(res)])
+            + [f"stress.{c}" for c in STRESS_COMPONENTS] + [f"energy.{e}" for e in _energy_names(res)]
+            + [f"{v}.{c}" for v in ("centroid", "measured_position", "measured_velocity") for c in XY])
 
 
 def step_index(res: Results, step: int) -> int:
@@ -132,7 +136,7 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     values = block_values(res, index, color)
     coll = plot_blocks(ax, verts[index], res.block_ptr, values)
     if values is not None:
-        fig.colorbar(coll, ax=ax, label=color)
+        fig.colorbar(coll, ax=ax, label=color, shrink=0.7)
     if trails:
         mp = history(res, "measured_position")
         for k in range(mp.shape[1]):
@@ -161,9 +165,9 @@ def fig_trajectories(res: Results, points: str = "measured", title: str | None =
     return fig
 
 
-def fig_time_series(runs: Results | Mapping[str, Results], quantity: str, blocks: Sequence[int] | None = None,
-                    point: int | None = None) -> Figure:
-    """A recorded quantity against time, one line per block (or point), for one run or several."""
+def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
+                    blocks: Sequence[int] | None = None) -> Figure:
+    """A recorded quantity against time, one line per block (or measured point; ``blocks`` picks them)."""
     runs = runs if isinstance(runs, Mapping) else {method_label(runs.method): runs}
     fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
     for label, res in runs.items():
@@ -172,10 +176,11 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str, blocks
         if y.ndim == 1:
             ax.plot(t, y, label=label)
             continue
-        if quantity in ("measured_position", "measured_velocity", "centroid"):
-            raise ValueError(f"{quantity} is a 2-vector: plot its components ({quantity}.x is not recorded); "
-                             "use fig_trajectories")
-        names = res.block_names
+        if y.ndim > 2:
+            raise ValueError(f"{quantity} is a vector per block or point: plot {quantity}.x, {quantity}.y, ... "
+                             "or use fig_trajectories")
+        names = ([f"point {k}" for k in range(y.shape[1])] if quantity.startswith("measured_")
+                 else res.block_names)
         for b in (range(y.shape[1]) if blocks is None else blocks):
             ax.plot(t, y[:, b], label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
     ax.set(xlabel="time (s)", ylabel=quantity)
