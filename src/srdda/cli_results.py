@@ -19,9 +19,12 @@ def _read(path: str) -> StoredResult:
     if Path(path).is_dir():
         path = str(Path(path) / "results.h5")
     try:
-        return read_results(path)
+        res = read_results(path)
     except ResultsFileError as exc:
         raise click.UsageError(str(exc)) from None
+    if "step" not in res.histories or len(res.step) == 0:
+        raise click.UsageError(f"{path}: no recorded step was flushed yet")
+    return res
 
 
 def resume_run(path: str, quiet: bool = False, flush_every: int | None = None) -> str:
