@@ -20,7 +20,8 @@ Layout (see docs/results.md)::
     /history/<name>   first axis = recorded step: step, time, centroid, area,
                       rotation, velocity, stress, vertices, measured_position,
                       measured_velocity, energy (attr names), iterations
-    /checkpoint/<f>   first axis = flush: step, time and the State's arrays
+    /checkpoint/<f>   one checkpoint per flush: step, time and every State field
+                      (see :mod:`srdda.io.checkpoint`)
     /contacts/<name>  rows of all recorded contacts, ``offsets`` (k+1) and ``step`` (k)
 
 Every appended dataset only grows, so the extent stored at the last flush is
@@ -41,22 +42,50 @@ import numpy as np
 
 from ..model import Load, Model, ModelArrays
 from ..simulation import Result, RunSettings, State, energies, measured_points, run
+from .checkpoint import append_checkpoint, checkpoint_count, read_checkpoint, truncate_checkpoints
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "ResultsStore", "ResultsFileError", "StoredResult",
+__all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state", "ResultsStore", "ResultsFileError", "StoredResult",
            "read_results", "resume", "load_checkpoint", "model_arrays_from_file"]
 
 FORMAT = "srdda-results"
 FORMAT_VERSION = 1
 ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "total")
-STATE_ARRAYS = ("vertices", "points", "velocity", "acceleration", "stress", "rotation")
 
-ContactProvider = Callable[[ModelArrays, State], Mapping[str, np.ndarray]]
-"""Hook for contact output: returns per-contact arrays (first axis = contact) of one state.
+ContactProvider = Callable[[ModelArrays, State], Mapping[str, np.ndarray] | None]
+"""Hook for contact output: per-contact arrays (first axis = contact) of one state, or None.
 
-The contacts module supplies it (e.g. ``{"point": (nc, 2), "normal": (nc, 2),
-"normal_force": (nc,), "shear_force": (nc,), "block_a": (nc,), "block_b": (nc,)}``);
-the store appends them every ``contact_every`` recorded steps under ``/contacts``.
+The default, :func:`contacts_from_state`, reads the contact set on
+``state.contacts``; another provider may give any arrays (e.g. ``{"point":
+(nc, 2), "normal": (nc, 2), "normal_force": (nc,), "shear_force": (nc,)}``).
+The store appends them at the recorded steps that are multiples of ``contact_every`` under ``/contacts``.
 """
+
+
+def contacts_from_state(arrays: ModelArrays, state: State) -> dict[str, np.ndarray] | None:
+    """The default contact output: the contact set a step leaves on ``state.contacts`` (None: no record).
+
+    Gives ``point`` (the contact vertex), ``point_b`` (its foot on the
+    contacted edge), ``normal`` (the edge's outward unit normal) and every
+    per-contact array of the set (``state``, ``normal_force``, ``gap``, ...).
+    """
+    c = getattr(state, "contacts", None)
+    if c is None or not hasattr(c, "vertex"):
+        return None
+    vertex = np.asarray(c.vertex, dtype=np.int64)
+    out: dict[str, np.ndarray] = {"point": state.vertices[vertex]}
+    if hasattr(c, "edge"):
+        a = state.vertices[np.asarray(c.edge, dtype=np.int64)]
+        b = state.vertices[arrays.next_vertex[np.asarray(c.edge, dtype=np.int64)]]
+        d = b - a
+        length2 = np.maximum(np.einsum("ij,ij->i", d, d), 1e-300)
+        s = np.clip(np.einsum("ij,ij->i", out["point"] - a, d) / length2, 0.0, 1.0)
+        out["point_b"] = a + s[:, None] * d
+        out["normal"] = np.column_stack([d[:, 1], -d[:, 0]]) / np.sqrt(length2)[:, None]  # CCW: outward
+    for f in dataclasses.fields(c):
+        value = getattr(c, f.name)
+        if isinstance(value, np.ndarray) and value.shape[:1] == vertex.shape and f.name not in out:
+            out[f.name] = value
+    return out
 
 
 class ResultsFileError(ValueError):
@@ -158,16 +187,17 @@ class ResultsStore:
     """Recorder writing a run into an HDF5 file incrementally (see the module docstring).
 
     ``flush_every``: recorded steps between flushes (and checkpoints); a killed
-    run loses at most that many recorded steps. ``contact_provider`` and
-    ``contact_every`` are the hook for contact output. ``model_text``: the
-    model file's text, stored for provenance and re-runs.
+    run loses at most that many recorded steps. ``contact_provider`` gives
+    the contact output (default: the contact set on ``state.contacts``),
+    written at recorded steps that are multiples of ``contact_every``.
+    ``model_text``: the model file's text, stored for provenance and re-runs.
     """
 
     path: str | Path
     settings: RunSettings
     flush_every: int = 100
     model_text: str | None = None
-    contact_provider: ContactProvider | None = None
+    contact_provider: ContactProvider | None = contacts_from_state
     contact_every: int = 1
     append: bool = False  # used by resume(): continue an existing file
     _file: h5py.File | None = field(default=None, init=False, repr=False)
@@ -176,7 +206,6 @@ class ResultsStore:
     _contact_steps: list[int] = field(default_factory=list, init=False, repr=False)
     _contact_counts: list[int] = field(default_factory=list, init=False, repr=False)
     _pending: int = field(default=0, init=False, repr=False)
-    _recorded: int = field(default=0, init=False, repr=False)
     _last_step: int = field(default=-1, init=False, repr=False)
     _state: State | None = field(default=None, init=False, repr=False)
 
@@ -202,9 +231,8 @@ class ResultsStore:
                "energy": np.array([e[k] for k in ENERGY_NAMES]), "iterations": np.int64(solves)}
         for name, value in row.items():
             self._buffer.setdefault(name, []).append(np.array(value, copy=True))
-        if self.contact_provider is not None and self._recorded % self.contact_every == 0:
+        if self.contact_provider is not None and state.step % self.contact_every == 0:
             self._record_contacts(arrays, state)
-        self._recorded += 1
         self._last_step = state.step
         self._state = state
         self._pending += 1
@@ -247,17 +275,17 @@ class ResultsStore:
             self._contacts, self._contact_steps, self._contact_counts = {}, [], []
         if self._state is not None:
             cp = f["checkpoint"]
-            s = self._state
-            if not ("step" in cp and len(cp["step"]) and cp["step"][-1] == s.step):
-                for name in STATE_ARRAYS:
-                    _append(cp, name, getattr(s, name)[None], 4)
-                _append(cp, "time", np.array([s.time]), 64)
-                _append(cp, "step", np.array([s.step], dtype=np.int64), 64)  # written last: marks it complete
+            n = checkpoint_count(cp)
+            if n == 0 or cp["step"][n - 1] != self._state.step:
+                append_checkpoint(cp, self._state)
         self._pending = 0
         f.flush()
 
     def _record_contacts(self, arrays: ModelArrays, state: State) -> None:
-        data = {k: np.asarray(v) for k, v in self.contact_provider(arrays, state).items()}  # type: ignore[misc]
+        given = self.contact_provider(arrays, state)  # type: ignore[misc]
+        if given is None:
+            return
+        data = {k: np.asarray(v) for k, v in given.items()}
         sizes = {len(v) for v in data.values()}
         if len(sizes) > 1:
             raise ValueError(f"contact arrays of step {state.step} differ in length: {sizes}")
@@ -293,11 +321,10 @@ class ResultsStore:
 def _truncate_to_checkpoint(f: h5py.File) -> int:
     """Cut every appended dataset back to the last complete checkpoint; return its step."""
     cp = f["checkpoint"]
-    n_cp = _group_length(cp)
+    n_cp = checkpoint_count(cp)
     if n_cp == 0:
         raise ResultsFileError(f"{f.filename}: no checkpoint was flushed; nothing to resume from")
-    for ds in cp.values():
-        ds.resize(n_cp, axis=0)
+    truncate_checkpoints(cp, n_cp)
     step = int(cp["step"][n_cp - 1])
     hist = f["history"]
     n = _group_length(hist)
@@ -383,17 +410,18 @@ def read_results(path: str | Path) -> StoredResult:
 
 def load_checkpoint(path: str | Path, arrays: ModelArrays) -> State:
     """The :class:`State` of the last complete checkpoint of a results file."""
+    def moments(vertices: np.ndarray):
+        if vertices.shape != arrays.vertices.shape:
+            raise ResultsFileError(f"{path}: the checkpoint has {len(vertices)} vertices, the model "
+                                   f"{len(arrays.vertices)}")
+        return arrays.moments(vertices)
+
     with _open_read(path) as f:
         cp = f["checkpoint"]
-        n = _group_length(cp)
+        n = checkpoint_count(cp)
         if n == 0:
             raise ResultsFileError(f"{path}: no checkpoint was flushed; nothing to resume from")
-        values = {name: cp[name][n - 1] for name in STATE_ARRAYS}
-        step, time = int(cp["step"][n - 1]), float(cp["time"][n - 1])
-    if values["vertices"].shape != arrays.vertices.shape:
-        raise ResultsFileError(f"{path}: the checkpoint has {len(values['vertices'])} vertices, "
-                               f"the model {len(arrays.vertices)}")
-    return State(step=step, time=time, moments=arrays.moments(values["vertices"]), **values)
+        return read_checkpoint(cp, n - 1, moments)
 
 
 def _resume_arrays(path: str | Path) -> ModelArrays:
@@ -412,7 +440,8 @@ def _resume_arrays(path: str | Path) -> ModelArrays:
 
 
 def resume(path: str | Path, model: Model | ModelArrays | None = None, flush_every: int | None = None,
-           progress: Callable[[int], None] | None = None, contact_provider: ContactProvider | None = None,
+           progress: Callable[[int], None] | None = None,
+           contact_provider: ContactProvider | None = contacts_from_state,
            ) -> Result:
     """Continue the run of a results file from its last checkpoint up to its last step, appending to it.
 

@@ -1,0 +1,144 @@
+"""Checkpoints of the full :class:`~srdda.simulation.State` in an HDF5 group, append-only.
+
+Generic over the State's fields, so fields other modules add (contact sets,
+constraint multipliers, energy ledgers, ...) are saved and restored without
+this module knowing them:
+
+* an array field ``f`` is appended row-wise to dataset ``f`` (its first axis;
+  a scalar counts as one row, attr ``scalar``), and its row count to ``f__count``;
+* a field holding a dataclass (e.g. a contact set) is flattened into
+  ``f.<subfield>`` datasets as above, with ``f__present`` (bool per
+  checkpoint; False for None) whose attr ``class`` names the dataclass;
+* ``step`` and ``time`` are appended last: a checkpoint counts only when every
+  per-checkpoint dataset (``step``, ``time``, ``*__count``, ``*__present``)
+  has its row, so one cut short by a kill is ignored.
+
+``moments`` is not stored: it is recomputed from the vertices, as the time
+loop does.
+"""
+from __future__ import annotations
+
+import dataclasses
+import importlib
+from typing import Any
+
+import h5py
+import numpy as np
+
+from ..geometry.polygon import BlockMoments
+
+__all__ = ["append_checkpoint", "checkpoint_count", "truncate_checkpoints", "read_checkpoint"]
+
+SKIPPED = ("step", "time", "moments")
+
+
+def _class_path(obj: Any) -> str:
+    cls = type(obj)
+    return f"{cls.__module__}:{cls.__qualname__}"
+
+
+def _import(path: str) -> type:
+    module, _, name = path.partition(":")
+    obj: Any = importlib.import_module(module)
+    for part in name.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def _append(group: h5py.Group, name: str, rows: np.ndarray) -> None:
+    if name not in group:
+        row = rows.shape[1:]
+        row_bytes = max(1, int(np.prod(row, dtype=np.int64)) * rows.dtype.itemsize)
+        chunk = int(max(1, min(max(len(rows), 16), (1 << 20) // row_bytes)))
+        group.create_dataset(name, shape=(0, *row), maxshape=(None, *(d if d else None for d in row)),
+                             dtype=rows.dtype, chunks=(chunk, *(max(d, 1) for d in row)))
+    ds = group[name]
+    n = ds.shape[0]
+    ds.resize(n + len(rows), axis=0)
+    ds[n:] = rows
+
+
+def _append_value(group: h5py.Group, name: str, value: Any) -> None:
+    arr = np.asarray(value)
+    scalar = arr.ndim == 0
+    _append(group, name, arr.reshape(1) if scalar else arr)
+    group[name].attrs["scalar"] = scalar
+    _append(group, f"{name}__count", np.array([1 if scalar else len(arr)], dtype=np.int64))
+
+
+def append_checkpoint(group: h5py.Group, state: Any) -> None:
+    """Append ``state`` (a State dataclass) as the next checkpoint of ``group``."""
+    group.attrs["state_class"] = _class_path(state)
+    for f in dataclasses.fields(state):
+        if f.name in SKIPPED:
+            continue
+        value = getattr(state, f.name)
+        if dataclasses.is_dataclass(value) or value is None:
+            present = f"{f.name}__present"
+            _append(group, present, np.array([value is not None]))
+            if value is not None:
+                group[present].attrs["class"] = _class_path(value)
+                for g in dataclasses.fields(value):
+                    _append_value(group, f"{f.name}.{g.name}", getattr(value, g.name))
+        else:
+            _append_value(group, f.name, value)
+    _append(group, "time", np.array([state.time], dtype=float))
+    _append(group, "step", np.array([state.step], dtype=np.int64))
+
+
+def _per_checkpoint(group: h5py.Group) -> list[str]:
+    """Datasets with one row per checkpoint (nested fields' counts have one per present value)."""
+    return [k for k in group if k in ("step", "time") or k.endswith("__present")
+            or (k.endswith("__count") and "." not in k)]
+
+
+def checkpoint_count(group: h5py.Group) -> int:
+    """Complete checkpoints in ``group``."""
+    if "step" not in group:
+        return 0
+    return min(group[k].shape[0] for k in _per_checkpoint(group))
+
+
+def truncate_checkpoints(group: h5py.Group, n: int) -> None:
+    """Keep the first ``n`` checkpoints (drop one a kill cut short, or later ones)."""
+    for k in _per_checkpoint(group):
+        group[k].resize(n, axis=0)
+    for k in [k for k in group if k.endswith("__present")]:
+        kept = int(np.sum(group[k][()]))
+        prefix = k[: -len("__present")] + "."
+        for c in [c for c in group if c.startswith(prefix) and c.endswith("__count")]:
+            group[c].resize(kept, axis=0)
+    for k in [k for k in group if k.endswith("__count")]:
+        group[k[: -len("__count")]].resize(int(np.sum(group[k][()])), axis=0)
+
+
+def _read_value(group: h5py.Group, name: str, index: int) -> Any:
+    counts = group[f"{name}__count"][: index + 1]
+    start = int(np.sum(counts[:-1]))
+    value = group[name][start:start + int(counts[-1])]
+    return value[0] if group[name].attrs.get("scalar", False) else value
+
+
+def read_checkpoint(group: h5py.Group, index: int, moments: Any) -> Any:
+    """The State of checkpoint ``index``; ``moments(vertices) -> BlockMoments`` recomputes the integrals."""
+    cls = _import(str(group.attrs["state_class"]))
+    kwargs: dict[str, Any] = {"step": int(group["step"][index]), "time": float(group["time"][index])}
+    for f in dataclasses.fields(cls):
+        if f.name in SKIPPED:
+            continue
+        present = f"{f.name}__present"
+        if present in group:
+            if not group[present][index]:
+                kwargs[f.name] = None
+                continue
+            sub = _import(str(group[present].attrs["class"]))
+            j = int(np.sum(group[present][:index]))  # its rows are those of the present values only
+            kwargs[f.name] = sub(**{g.name: _read_value(group, f"{f.name}.{g.name}", j)
+                                    for g in dataclasses.fields(sub)})
+        elif f"{f.name}__count" in group:
+            kwargs[f.name] = _read_value(group, f.name, index)
+        # a field the file does not have keeps its default (a file written before the field existed)
+    kwargs["moments"] = moments(kwargs["vertices"])
+    if not isinstance(kwargs["moments"], BlockMoments):
+        raise TypeError("moments() must return BlockMoments")
+    return cls(**kwargs)

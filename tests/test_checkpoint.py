@@ -1,0 +1,119 @@
+"""Checkpoints are generic over State's fields: extra arrays, nested dataclasses (contact sets), None."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+import srdda
+from srdda.io.checkpoint import append_checkpoint, checkpoint_count, read_checkpoint, truncate_checkpoints
+from srdda.io.results_store import ResultsStore, contacts_from_state, read_results
+from srdda.simulation import State, initial_state
+from results_models import two_block_model
+
+
+@dataclass(frozen=True)
+class FakeContacts:
+    """Stands in for a contact set: per-contact arrays of varying length and a scalar."""
+
+    vertex: np.ndarray
+    edge: np.ndarray
+    state: np.ndarray
+    normal_force: np.ndarray
+    energy: float
+
+
+@dataclass(frozen=True)
+class ExtendedState(State):
+    contacts: FakeContacts | None = None
+    multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+def _states(n: int) -> list[ExtendedState]:
+    arrays = two_block_model().arrays()
+    base = initial_state(arrays, srdda.RunSettings(dt=1e-3, n_steps=1).resolved_method())
+    rng = np.random.default_rng(0)
+    out = []
+    for k in range(n):
+        nc = [0, 3, None, 1, 2][k % 5]
+        contacts = None if nc is None else FakeContacts(
+            rng.integers(0, 4, nc), rng.integers(4, 9, nc), rng.integers(0, 3, nc).astype(np.int8),
+            rng.normal(size=nc), float(k))
+        fields_ = {name: getattr(base, name) + 0.1 * k for name in ("vertices", "points", "velocity", "stress")}
+        out.append(ExtendedState(step=k, time=1e-3 * k, acceleration=base.acceleration, rotation=base.rotation,
+                                 moments=arrays.moments(fields_["vertices"]), contacts=contacts,
+                                 multipliers=np.arange(k % 3, dtype=float), **fields_))
+    return out
+
+
+def _equal(a: ExtendedState, b: ExtendedState) -> None:
+    assert type(a) is type(b) and a.step == b.step and a.time == b.time
+    for name in ("vertices", "points", "velocity", "acceleration", "stress", "rotation", "multipliers"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    np.testing.assert_array_equal(a.moments.centroid, b.moments.centroid)
+    if a.contacts is None:
+        assert b.contacts is None
+        return
+    assert b.contacts.energy == a.contacts.energy
+    for name in ("vertex", "edge", "state", "normal_force"):
+        got, want = getattr(b.contacts, name), getattr(a.contacts, name)
+        assert got.dtype == want.dtype
+        np.testing.assert_array_equal(got, want, err_msg=name)
+
+
+def test_every_field_round_trips_and_truncation_realigns(tmp_path: Path) -> None:
+    arrays = two_block_model().arrays()
+    states = _states(7)
+    with h5py.File(tmp_path / "c.h5", "w") as f:
+        g = f.create_group("checkpoint")
+        for s in states[:5]:
+            append_checkpoint(g, s)
+        assert checkpoint_count(g) == 5
+        for i, s in enumerate(states[:5]):
+            _equal(s, read_checkpoint(g, i, arrays.moments))
+        truncate_checkpoints(g, 2)  # drop checkpoints 2-4 (one of them without contacts), then continue
+        for s in states[5:]:
+            append_checkpoint(g, s)
+        assert checkpoint_count(g) == 4
+        for i, s in enumerate([*states[:2], *states[5:]]):
+            _equal(s, read_checkpoint(g, i, arrays.moments))
+
+
+def test_a_checkpoint_cut_short_is_not_counted(tmp_path: Path) -> None:
+    states = _states(3)
+    with h5py.File(tmp_path / "c.h5", "w") as f:
+        g = f.create_group("checkpoint")
+        append_checkpoint(g, states[0])
+        append_checkpoint(g, states[1])
+        g["step"].resize(1, axis=0)  # as if killed before the second checkpoint's step was written
+        assert checkpoint_count(g) == 1
+        truncate_checkpoints(g, 1)
+        append_checkpoint(g, states[2])
+        _equal(states[2], read_checkpoint(g, 1, two_block_model().arrays().moments))
+
+
+def test_contact_sets_on_the_state_are_recorded_by_default(tmp_path: Path) -> None:
+    arrays = two_block_model().arrays()
+    state = _states(2)[1]  # three contacts
+    out = contacts_from_state(arrays, state)
+    c = state.contacts
+    np.testing.assert_array_equal(out["point"], state.vertices[c.vertex])
+    np.testing.assert_array_equal(out["normal_force"], c.normal_force)
+    # the foot lies on the contacted edge and the normal is a unit vector perpendicular to it
+    a, b = state.vertices[c.edge], state.vertices[arrays.next_vertex[c.edge]]
+    cross = (b - a)[:, 0] * (out["point_b"] - a)[:, 1] - (b - a)[:, 1] * (out["point_b"] - a)[:, 0]
+    np.testing.assert_allclose(cross, 0.0, atol=1e-12)  # the coordinates are O(1) m
+    np.testing.assert_allclose(np.linalg.norm(out["normal"], axis=1), 1.0, rtol=1e-15)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", out["normal"], b - a), 0.0, atol=1e-15)
+    plain = initial_state(arrays, srdda.RunSettings(dt=1e-3, n_steps=1).resolved_method())
+    assert contacts_from_state(arrays, plain) is None  # a State without contact sets records none
+
+    store = ResultsStore(tmp_path / "s.h5", srdda.RunSettings(dt=1e-3, n_steps=4), flush_every=2)
+    for s in _states(5):
+        store.record(arrays, s, 1e9, 1)
+    store.finish("completed", s)
+    stored = read_results(tmp_path / "s.h5")
+    np.testing.assert_array_equal(stored.contacts["step"], [0, 1, 3, 4])  # step 2 has no contact set
+    np.testing.assert_array_equal(np.diff(stored.contacts["offsets"]), [0, 3, 1, 2])
