@@ -109,7 +109,7 @@ def _rod(results: dict[str, Result], model: Model) -> FigureList:
              plotting.fig_swing_trajectories(results, pivot=_pivot(model)))]
 
 
-@register_figures("wave")
+@register_figures("sine-wave")
 def _wave(results: dict[str, Result], model: Model) -> FigureList:
     return [(f"Fig. {8 + i}: the bar chain's transverse displacement at CS {s} "
              f"({i + 1} period{'s' if i else ''} of the driving sine).",
