@@ -20,7 +20,8 @@ def _contacts(arrays, state):
     q = state.vertices[arrays.block_ptr[:-1] + 1]
     n = np.tile([0.0, 1.0], (arrays.n_blocks, 1))
     return {"point": p, "point_b": q, "normal": n, "normal_force": np.full(arrays.n_blocks, 10.0 * state.step),
-            "shear_force": np.arange(arrays.n_blocks, dtype=float)}
+            "shear_force": np.arange(arrays.n_blocks, dtype=float), "bonded": np.array([True, False]),
+            "state": np.array([2, 0], dtype=np.int8)}
 
 
 @pytest.fixture(scope="module")
@@ -69,6 +70,8 @@ def test_contact_vtu_files_hold_lines_and_forces(stored, tmp_path: Path) -> None
     np.testing.assert_array_equal(mesh.cell_data["normal_force"][0], [40.0, 40.0])
     np.testing.assert_array_equal(mesh.cell_data["shear_force"][0], [0.0, 1.0])
     np.testing.assert_array_equal(mesh.cell_data["normal"][0], [[0, 1, 0], [0, 1, 0]])
+    np.testing.assert_array_equal(mesh.cell_data["bonded"][0], [1, 0])  # booleans as 0/1
+    np.testing.assert_array_equal(mesh.cell_data["state"][0], [2, 0])
 
 
 def test_vertex_contacts_and_bad_contact_arrays() -> None:

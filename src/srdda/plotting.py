@@ -41,6 +41,7 @@ ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "total")
 VELOCITY_COMPONENTS = ("vx", "vy", "omega", "exx_rate", "eyy_rate", "gxy_rate")
 STRESS_COMPONENTS = ("sxx", "syy", "sxy")
 XY = ("x", "y")
+MAX_LEGEND = 12  # more lines than this get no legend (it would cover the plot)
 
 
 def _energy_names(res: Results) -> tuple[str, ...]:
@@ -184,7 +185,8 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
         for b in (range(y.shape[1]) if blocks is None else blocks):
             ax.plot(t, y[:, b], label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
     ax.set(xlabel="time (s)", ylabel=quantity)
-    ax.legend(fontsize="small")
+    if len(ax.get_lines()) <= MAX_LEGEND:
+        ax.legend(fontsize="small")
     return fig
 
 

@@ -45,6 +45,7 @@ __all__ = ["ExampleRun", "FIGURES", "register_figures", "run_examples", "write_r
 FigureList = list[tuple[str, Figure]]  # (caption, figure)
 FigureMaker = Callable[[dict[str, Result], Model], FigureList]
 FIGURES: dict[str, FigureMaker] = {}
+MAX_OMEGA_BLOCKS = 4  # the ω-against-time figure is drawn for models of at most this many blocks
 
 
 def register_figures(name: str) -> Callable[[FigureMaker], FigureMaker]:
@@ -90,8 +91,10 @@ def _common(results: dict[str, Result]) -> FigureList:
     """Figures every example gets: total energy and angular velocities per method."""
     figs = [("Total energy (kinetic + gravity + elastic + springs) against time, per method: its drift is "
              "numerical work.", plotting.fig_time_series(results, "energy.total"))]
-    figs.append(("Angular velocity of every block against time, per method.",
-                 plotting.fig_time_series(results, "velocity.omega")))
+    first = next(iter(results.values()))
+    if len(first.block_names) <= MAX_OMEGA_BLOCKS:
+        figs.append(("Angular velocity of every block against time, per method.",
+                     plotting.fig_time_series(results, "velocity.omega")))
     return figs
 
 

@@ -83,6 +83,8 @@ def contacts_mesh(contacts: Mapping[str, np.ndarray]) -> meshio.Mesh:
         arr = np.asarray(value)
         if arr.shape[:1] != (n,):
             raise ValueError(f"contact array {name!r} has {arr.shape[:1]} rows, expected {n}")
+        if arr.dtype == bool:  # VTK has no boolean arrays
+            arr = arr.astype(np.uint8)
         if arr.ndim == 2 and arr.shape[1] == 2:
             arr = _xyz(arr)
         data[name] = [arr]
