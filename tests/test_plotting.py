@@ -105,6 +105,18 @@ def test_rockfall_draws_slope_and_paths() -> None:
     _check(fig, 3)
 
 
+def test_configuration_marks_supports_loads_and_measured_points() -> None:
+    arrays = rod_model().arrays()
+    fig = plotting.fig_configuration(arrays, "rod")
+    ax = fig.axes[0]
+    labels = [ln.get_label() for ln in ax.get_lines()]
+    assert labels == ["fixed point", "point load", "measured point"]
+    np.testing.assert_array_equal(ax.get_lines()[0].get_xydata(), arrays.points[arrays.fixed_rows])
+    np.testing.assert_array_equal(ax.collections[0].get_paths()[0].vertices[:4], arrays.vertices)
+    assert [t.get_text() for t in ax.texts] == ["P0"]
+    _check(fig, 1)
+
+
 def test_any_run_model_trajectories_and_time_series(tmp_path) -> None:
     path = tmp_path / "r.h5"
     settings = srdda.RunSettings(dt=1e-3, n_steps=40, method="dda0")

@@ -7,6 +7,7 @@ paper's figures put the three methods side by side (one column each, in the
 order of the ``results`` mapping):
 
 =============================  ===========================================
+:func:`fig_configuration`       Figs. 3, 5, 7, 11, 14: the model set-up
 :func:`fig_swing_trajectories`  Figs. 4 and 6: pendulum / rod trajectories,
                                 zoomed view of the offset, radial offset
 :func:`fig_wave_shapes`         Figs. 8-10: bar-chain shape at given steps
@@ -30,7 +31,8 @@ import numpy as np  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-__all__ = ["history", "quantity_names", "block_values", "method_label", "plot_blocks", "fig_model",
+__all__ = ["history", "quantity_names", "block_values", "method_label", "plot_blocks", "fig_configuration",
+           "fig_model",
            "fig_trajectories", "fig_time_series",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index"]
 
@@ -120,6 +122,37 @@ def block_values(res: Results, index: int, color: str | None) -> np.ndarray | No
         area = history(res, "area")
         return area[index] / area[0] - 1.0
     return history(res, color)[index]
+
+
+def fig_configuration(arrays: Any, title: str = "", labels: Sequence[str] | None = None) -> Figure:
+    """The model before the run (paper Figs. 3, 5, 7, 11, 14): blocks, supports, springs, measured points.
+
+    ``arrays`` is a :class:`~srdda.model.ModelArrays`. Fixed blocks are grey,
+    fixed points black triangles, point-spring ends open circles, point loads
+    arrows, measured points red dots labelled with ``labels`` (default P0, P1...).
+    """
+    fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
+    colors = np.where(arrays.block_fixed, "0.8", "#c8d6e5")
+    coll = plot_blocks(ax, arrays.vertices, arrays.block_ptr)
+    coll.set_facecolor(list(colors))
+    pts = arrays.points
+    if len(arrays.fixed_rows):
+        ax.plot(*pts[arrays.fixed_rows].T, "k^", ms=8, label="fixed point")
+    springs = np.concatenate([arrays.spring_rows_a, arrays.spring_rows_b])
+    if len(springs):
+        ax.plot(*pts[springs].T, "o", mfc="none", mec="tab:green", ms=7, label="spring end")
+    if len(arrays.load_rows):
+        ax.plot(*pts[arrays.load_rows].T, "v", color="tab:orange", ms=7, label="point load")
+    mr = arrays.measured_rows
+    if len(mr):
+        ax.plot(*pts[mr].T, "o", color="tab:red", ms=4, label="measured point")
+        for k, p in enumerate(pts[mr]):
+            ax.annotate(labels[k] if labels else f"P{k}", p, xytext=(4, 4), textcoords="offset points",
+                        color="tab:red", fontsize=8)
+    ax.set(xlabel="x (m)", ylabel="y (m)", title=title)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize="small", loc="best")
+    return fig
 
 
 def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails: bool = True) -> Figure:

@@ -45,6 +45,7 @@ __all__ = ["ExampleRun", "FIGURES", "register_figures", "run_examples", "write_r
 FigureList = list[tuple[str, Figure]]  # (caption, figure)
 FigureMaker = Callable[[dict[str, Result], Model], FigureList]
 FIGURES: dict[str, FigureMaker] = {}
+CONFIG_FIGURES = {"pendulum": "3", "rod": "5", "sine-wave": "7", "nunchaku": "11", "rockfall": "14"}
 MAX_OMEGA_BLOCKS = 4  # the ω-against-time figure is drawn for models of at most this many blocks
 
 
@@ -183,7 +184,11 @@ def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = ME
         except Exception as exc:  # a diverged run may lack the steps a table needs: say so in the report
             errors.append(f"tables: {type(exc).__name__}: {exc}")
         try:
-            figures = FIGURES.get(name, _generic)(results, model) + _common(results)
+            paper_fig = f" (the paper's Fig. {CONFIG_FIGURES[name]})" if name in CONFIG_FIGURES else ""
+            figures = [(f"The model as built for these runs{paper_fig}: fixed blocks grey, fixed points "
+                        "triangles, spring ends circles, measured points red.",
+                        plotting.fig_configuration(model.arrays(), example.title))]
+            figures += FIGURES.get(name, _generic)(results, model) + _common(results)
         except Exception as exc:
             errors.append(f"figures: {type(exc).__name__}: {exc}")
         out.append(ExampleRun(name, example.title, results, rows, figures, wall, files, errors))
