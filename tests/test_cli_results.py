@@ -122,3 +122,29 @@ def test_run_resume_after_sigkill_reaches_the_uninterrupted_state(tmp_path: Path
         assert np.max(np.abs(getattr(final, name) - ref)) <= 1e-12 * max(np.max(np.abs(ref)), 1e-300), name
     both = CliRunner().invoke(main, ["run", str(ROD), "--resume", str(path)])
     assert both.exit_code == 2 and "not both" in both.output
+
+
+FAKE_FFMPEG = '''#!{python}
+"""Stands in for ffmpeg: reads the raw frames matplotlib pipes in and reports what it got."""
+import json, sys
+args = sys.argv[1:]
+data = sys.stdin.buffer.read()
+with open(args[-1], "w") as fh:
+    json.dump({{"size": args[args.index("-s") + 1], "pix_fmt": args[args.index("-pix_fmt") + 1],
+               "bytes": len(data)}}, fh)
+'''
+
+
+def test_mp4_pipes_every_frame_to_ffmpeg(rod_run: Path, tmp_path: Path, monkeypatch) -> None:
+    import json
+
+    fake = tmp_path / "ffmpeg"
+    fake.write_text(FAKE_FFMPEG.format(python=sys.executable))
+    fake.chmod(0o755)
+    monkeypatch.setattr(animation, "ffmpeg_path", lambda: str(fake))
+    written = animation.animate(rod_run, tmp_path / "rod.mp4", max_frames=5, dpi=50)
+    assert written == tmp_path / "rod.mp4"
+    got = json.loads(written.read_text())
+    width, height = (int(v) for v in got["size"].split("x"))
+    assert got["pix_fmt"] == "rgba" and (width, height) == (320, 240)  # 6.4 x 4.8 in at 50 dpi
+    assert got["bytes"] == 5 * width * height * 4  # five RGBA frames
