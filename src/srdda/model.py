@@ -13,6 +13,8 @@ from typing import Literal
 import numpy as np
 import shapely
 
+from .constraints.data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
+from .constraints.history import HistoryError, MotionHistory
 from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon
 
 __all__ = ["JointMaterial", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
@@ -152,6 +154,7 @@ class ModelArrays:
     edge_joint: np.ndarray  # (nv,) joint material of the edge starting at each vertex, -1 = by materials
     joint_properties: np.ndarray  # (nj, 3): friction angle (rad), cohesion (Pa), tensile strength (Pa)
     joint_by_materials: np.ndarray  # (nm, nm) joint index for a pair of block materials
+    links: ConstraintArrays = field(default_factory=ConstraintArrays)  # hinges, springs, prescribed motion
 
     @property
     def n_blocks(self) -> int:
@@ -176,6 +179,10 @@ class Model:
     joint_materials: dict[str, JointMaterial] = field(default_factory=dict)
     joint_map: dict[tuple[str, str], str] = field(default_factory=dict)
     default_joint: JointMaterial = JointMaterial()
+    hinges: list[HingeSpec] = field(default_factory=list)
+    springs: list[SpringSpec] = field(default_factory=list)
+    prescribed: list[PrescribedSpec] = field(default_factory=list)
+    base_acceleration: MotionHistory | None = None
 
     # -- building ---------------------------------------------------------
     def add_material(self, name: str, material: Material) -> str:
@@ -281,6 +288,102 @@ class Model:
         self.measured_points.append((b, p))
         return len(self.measured_points) - 1
 
+    # -- constraints, springs, driven points (srdda.constraints) -------------
+    def blocks_at(self, point: Sequence[float]) -> list[int]:
+        """Indices of every block containing ``point`` (on a boundary counts)."""
+        p = shapely.Point(point)
+        return [i for i, b in enumerate(self.blocks)
+                if shapely.Polygon(b.vertices).buffer(1e-9 * _scale(b.vertices)).covers(p)]
+
+    def add_hinge(self, point: Sequence[float], block_a: int | None = None, block_b: int | None = None,
+                  point_b: Sequence[float] | None = None, correct_drift: bool = True, name: str = "") -> int:
+        """Keep ``point`` of block a on ``point_b`` (default: the same point) of block b, exactly.
+
+        Without block indices the two blocks that contain the point are used.
+        ``correct_drift=False`` is the paper's Eq. 72 (right-hand side 0).
+        Returns the hinge's index (its force is ``Result.constraint_force[:, i]``).
+        """
+        what = name or f"hinge {len(self.hinges)}"
+        pa = np.asarray(point, dtype=float)
+        pb = pa if point_b is None else np.asarray(point_b, dtype=float)
+        if point_b is None and (block_a is None or block_b is None):
+            found = [i for i in self.blocks_at(pa) if i not in (block_a, block_b)]
+            missing = int(block_a is None) + int(block_b is None)
+            if len(found) != missing:
+                raise ModelError(f"{what}: cannot tell which blocks point {tuple(pa)} joins; give block_a and block_b")
+            block_a = found.pop(0) if block_a is None else block_a
+            block_b = found.pop(0) if block_b is None else block_b
+        a, pa = self._resolve(pa, block_a, what)
+        b, pb = self._resolve(pb, block_b, what)
+        if a == b:
+            raise ModelError(f"{what}: block_a and block_b must differ")
+        if self.blocks[a].fixed and self.blocks[b].fixed:
+            raise ModelError(f"{what}: both blocks are fixed")
+        self.hinges.append(HingeSpec(a, pa, b, pb, bool(correct_drift), what))
+        return len(self.hinges) - 1
+
+    def add_pin(self, point: Sequence[float], block: int | None = None, correct_drift: bool = True,
+                name: str = "") -> int:
+        """Pin ``point`` of a block to the ground exactly (Lagrange multipliers); returns its hinge index."""
+        what = name or f"pin {len(self.hinges)}"
+        b, p = self._resolve(point, block, what)
+        if self.blocks[b].fixed:
+            raise ModelError(f"{what}: block {self.blocks[b].name!r} is fixed already")
+        self.hinges.append(HingeSpec(b, p, -1, p, bool(correct_drift), what))
+        return len(self.hinges) - 1
+
+    def add_spring(self, point_a: Sequence[float], point_b: Sequence[float], stiffness: float,
+                   rest_length: float | None = None, damping: float = 0.0, kind: str = "axial",
+                   block_a: int | None = None, block_b: int | None = None) -> None:
+        """A linear spring (N/m) with optional dashpot (N·s/m) between two block points (see SpringSpec)."""
+        a, pa = self._resolve(point_a, block_a, "spring end a")
+        b, pb = self._resolve(point_b, block_b, "spring end b")
+        if not stiffness > 0:
+            raise ModelError(f"spring stiffness must be > 0, got {stiffness}")
+        if not damping >= 0:
+            raise ModelError(f"spring damping must be >= 0, got {damping}")
+        if kind not in ("axial", "offset"):
+            raise ModelError(f"spring kind must be 'axial' or 'offset', got {kind!r}")
+        if kind == "axial" and np.allclose(pa, pb):
+            raise ModelError("spring: an axial spring needs two distinct points (use kind='offset')")
+        if rest_length is not None and not rest_length >= 0:
+            raise ModelError(f"spring rest_length must be >= 0, got {rest_length}")
+        self.springs.append(SpringSpec(a, pa, b, pb, float(stiffness), rest_length, float(damping), kind))
+
+    def add_prescribed_motion(self, point: Sequence[float], history: object, quantity: str = "displacement",
+                              components: str = "xy", by: str = "multiplier", stiffness: float | None = None,
+                              block: int | None = None) -> None:
+        """Drive a block point: ``history`` of displacement (m, from its start) or velocity (m/s).
+
+        ``history``: [x, y] constant, [[t, x, y], ...] table, ``MotionHistory.sine(...)`` or a callable
+        of t; ``components`` "x", "y" or "xy"; ``by`` "multiplier" (exact) or "penalty" (``stiffness``
+        N/m, default the run's penalty).
+        """
+        b, p = self._resolve(point, block, "prescribed point")
+        if self.blocks[b].fixed:
+            raise ModelError(f"prescribed point: block {self.blocks[b].name!r} is fixed")
+        if quantity not in ("displacement", "velocity"):
+            raise ModelError(f"prescribed quantity must be 'displacement' or 'velocity', got {quantity!r}")
+        if components not in ("x", "y", "xy"):
+            raise ModelError(f"prescribed components must be 'x', 'y' or 'xy', got {components!r}")
+        if by not in ("multiplier", "penalty"):
+            raise ModelError(f"prescribed 'by' must be 'multiplier' or 'penalty', got {by!r}")
+        if stiffness is not None and not stiffness > 0:
+            raise ModelError(f"prescribed stiffness must be > 0, got {stiffness}")
+        try:
+            hist = MotionHistory.of(history)
+        except HistoryError as exc:
+            raise ModelError(f"prescribed point history: {exc}") from exc
+        self.prescribed.append(PrescribedSpec(b, p, hist, quantity, ("x" in components, "y" in components), by,
+                                              None if stiffness is None else float(stiffness)))
+
+    def set_base_acceleration(self, history: object) -> None:
+        """Ground acceleration a_g(t) (m/s²), applied as the body force -ρ·a_g on every block."""
+        try:
+            self.base_acceleration = MotionHistory.of(history)
+        except HistoryError as exc:
+            raise ModelError(f"base acceleration: {exc}") from exc
+
     # -- compiling ---------------------------------------------------------
     def arrays(self) -> ModelArrays:
         """Flat arrays of the whole model for the time loop."""
@@ -308,9 +411,12 @@ class Model:
         offsets = np.concatenate([[0], np.cumsum(sizes)])
         rows = [np.arange(offsets[i], offsets[i + 1]) for i in range(5)]
         pts = np.array([p for g in groups for p in g], dtype=float).reshape(-1, 2)
+        link_pts, link_owners, links = compile_links(self.hinges, self.springs, self.prescribed,
+                                                     self.base_acceleration, len(pts))
+        pts = np.concatenate([pts, link_pts])
         block_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         elasticity = np.array([elasticity_matrix(mats[b.material]) for b in self.blocks])
-        point_block = np.array([o for g in owners for o in g], dtype=np.int64)
+        point_block = np.concatenate([np.array([o for g in owners for o in g], dtype=np.int64), link_owners])
         joint_names = list(self.joint_materials)
         joints = [self.default_joint, *self.joint_materials.values()]
         mat_names = list(self.materials)
@@ -351,6 +457,7 @@ class Model:
             joint_properties=np.array([[np.radians(j.friction_angle), j.cohesion, j.tensile_strength]
                                        for j in joints]),
             joint_by_materials=by_mats,
+            links=links,
         )
 
 

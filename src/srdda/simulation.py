@@ -22,6 +22,7 @@ from typing import Protocol
 import numpy as np
 
 from .assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
+from .constraints import LEDGER, link_energy, step_terms, step_work
 from .geometry.polygon import BlockMoments
 from .integrators.methods import Method, method_preset
 from .integrators.schemes import SchemeCoefficients
@@ -85,6 +86,8 @@ class State:
     stress: np.ndarray  # (nb, 3)
     rotation: np.ndarray  # (nb,) accumulated rotation (rad)
     moments: BlockMoments  # block integrals of ``vertices``, computed once per state
+    multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))  # μ of the last step (constraint rows)
+    ledger: np.ndarray = field(default_factory=lambda: np.zeros(len(LEDGER)))  # cumulative work, see LEDGER
 
 
 class Recorder(Protocol):
@@ -112,6 +115,7 @@ class Result:
     measured_velocity: list[np.ndarray] = field(default_factory=list)
     energy: list[dict[str, float]] = field(default_factory=list)
     iterations: list[int] = field(default_factory=list)
+    multipliers: list[np.ndarray] = field(default_factory=list)  # μ per step; force on point a = -μ (N/m)
     status: str = "running"
     final_state: State | None = None
 
@@ -141,6 +145,7 @@ class Result:
         self.measured_velocity.append(vel)
         self.energy.append(energies(arrays, state, penalty))
         self.iterations.append(solves)
+        self.multipliers.append(state.multipliers.copy())
 
     def finish(self, status: str, state: State) -> None:
         self.status = status
@@ -258,9 +263,11 @@ def advance(arrays: ModelArrays, state: State, method: Method, dt: float, penalt
             term.add_to(system, ctx)
         system.fix_blocks(arrays.block_fixed)
         try:
-            dd = solver.solve(system, system.rhs.ravel()).reshape(-1, NDOF)
+            solution = solver.solve(system, system.full_rhs())
         except SolverError as exc:
             raise DivergenceError(f"step {state.step + 1}: {exc}") from exc
+        dd = solution[: system.size].reshape(-1, NDOF)
+        multipliers = solution[system.size:]
         solves += 1
         done = all([term.converged(dd, ctx) for term in terms])
         if secant:
@@ -282,7 +289,10 @@ def advance(arrays: ModelArrays, state: State, method: Method, dt: float, penalt
         new_v[:, 3:] = rotate_symmetric_components(new_v[:, 3:], dd[:, 2], 2.0)
         new_a[:, 3:] = rotate_symmetric_components(new_a[:, 3:], dd[:, 2], 2.0)
     new_state = State(state.step + 1, state.time + dt, vertices, points, new_v, new_a, stress,
-                      state.rotation + dd[:, 2], arrays.moments(vertices))
+                      state.rotation + dd[:, 2], arrays.moments(vertices), multipliers, state.ledger)
+    if arrays.links.active or len(arrays.load_rows):
+        new_state = replace(new_state, ledger=state.ledger + step_work(arrays, state, new_state, dd, multipliers,
+                                                                       ctx.t_load, dt, penalty))
     if not (np.all(np.isfinite(vertices)) and np.all(np.isfinite(new_v))):
         raise DivergenceError(f"step {new_state.step}: non-finite displacement or velocity")
     return new_state, solves
@@ -305,8 +315,12 @@ def energies(arrays: ModelArrays, state: State, penalty: float) -> dict[str, flo
     if len(arrays.spring_rows_a):
         gap = state.points[arrays.spring_rows_a] - state.points[arrays.spring_rows_b]
         spring += 0.5 * float(np.sum(arrays.spring_stiffness * np.sum(gap**2, axis=1)))
+    spring += link_energy(arrays, state, penalty)
     total = kinetic + gravity + elastic + spring
-    return {"kinetic": kinetic, "gravity": gravity, "elastic": elastic, "spring": spring, "total": total}
+    out = {"kinetic": kinetic, "gravity": gravity, "elastic": elastic, "spring": spring, "total": total}
+    out.update(zip(LEDGER, map(float, state.ledger)))
+    out["balance"] = total - out["work_loads"] - out["work_prescribed"] - out["work_constraints"] + out["dissipated"]
+    return out
 
 
 def measured_points(arrays: ModelArrays, state: State) -> tuple[np.ndarray, np.ndarray]:
@@ -335,12 +349,13 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     sinks: list[Recorder] = [result, *recorders]
     for sink in sinks:
         sink.record(arrays, state, settings.penalty, 0)
+    terms = step_terms(arrays)
     last_step = state.step + settings.n_steps
     status = "completed"
     while state.step < last_step:
         try:
             state, solves = advance(arrays, state, method, settings.dt, settings.penalty, solver,
-                                    settings.secant_tolerance, settings.secant_max_iterations)
+                                    settings.secant_tolerance, settings.secant_max_iterations, terms)
         except DivergenceError as exc:
             status = f"diverged: {exc}"
             break

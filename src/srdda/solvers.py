@@ -10,6 +10,14 @@
 * ``pardiso``: MKL PARDISO via pypardiso (``pip install srdda[pardiso]``).
 * ``auto``: dense up to ``DENSE_LIMIT`` unknowns, else pardiso, cholmod or
   superlu, the first that is installed.
+
+A system with constraint rows (``system.n_constraints > 0``) is the saddle
+point [[A, Cᵀ], [C, 0]]·[Δd; μ] = [F; g]; ``rhs`` then has n + nc entries and
+the solution holds Δd followed by μ. It is symmetric indefinite, so every
+backend solves it by LU of the augmented matrix with pivoting: LAPACK's
+Bunch-Kaufman LDLᵀ (``dense``), SuperLU with partial pivoting and a COLAMD
+ordering (``superlu``, also used by ``cholmod``, whose Cholesky needs a
+definite matrix), PARDISO (``pardiso``). See docs/constraints.md.
 """
 from __future__ import annotations
 
@@ -43,12 +51,26 @@ def _check(x: np.ndarray) -> np.ndarray:
     return x
 
 
+def _saddle_superlu(system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+    """Sparse LU (SuperLU, partial pivoting) of the augmented constrained system."""
+    try:
+        lu = spla.splu(system.saddle_csr().tocsc(), permc_spec="COLAMD")
+    except RuntimeError as exc:
+        raise SolverError(f"singular constrained system (redundant or conflicting constraints?): {exc}") from exc
+    return _check(lu.solve(rhs))
+
+
+def _saddle_dense(system: BlockSystem) -> np.ndarray:
+    return system.saddle_csr().toarray()
+
+
 class DenseSolver:
     name = "dense"
 
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        matrix = _saddle_dense(system) if system.n_constraints else system.to_dense()
         try:
-            return _check(sla.solve(system.to_dense(), rhs, assume_a="sym", check_finite=False))
+            return _check(sla.solve(matrix, rhs, assume_a="sym", check_finite=False))
         except (np.linalg.LinAlgError, sla.LinAlgError) as exc:
             raise SolverError(f"singular system: {exc}") from exc
 
@@ -57,6 +79,8 @@ class SuperLUSolver:
     name = "superlu"
 
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        if system.n_constraints:
+            return _saddle_superlu(system, rhs)
         A = system.to_csr().tocsc()
         try:
             lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
@@ -70,6 +94,8 @@ class CholmodSolver:
     name = "cholmod"
 
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        if system.n_constraints:
+            return _saddle_superlu(system, rhs)
         from sksparse.cholmod import CholmodError, cholesky
 
         try:
@@ -85,7 +111,8 @@ class PardisoSolver:
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
         import pypardiso
 
-        return _check(pypardiso.spsolve(system.to_csr(), rhs))
+        matrix = system.saddle_csr() if system.n_constraints else system.to_csr()
+        return _check(pypardiso.spsolve(matrix, rhs))
 
 
 class AutoSolver:
@@ -98,7 +125,7 @@ class AutoSolver:
         self.sparse = next(get_solver(n) for n in ("pardiso", "cholmod", "superlu") if n in available_solvers())
 
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
-        chosen = self.dense if system.size <= DENSE_LIMIT else self.sparse
+        chosen = self.dense if system.size + system.n_constraints <= DENSE_LIMIT else self.sparse
         return chosen.solve(system, rhs)
 
 

@@ -4,6 +4,11 @@ Sub-matrices are kept as dense stacks until the solve: ``diag`` (nb, 6, 6) for
 every block and ``pair_blocks`` (np, 6, 6) for coupled pairs (row block
 ``pair_i``, column block ``pair_j``, both orders present). Conversion to CSR is
 one ``coo_matrix`` call; to dense (tiny models) one ``np.add.at``.
+
+Exact constraints (hinges, pins, prescribed motion by multipliers, paper
+Eqs. 72-75) add rows C (nc, n) with right-hand side g: the system becomes the
+saddle point [[A, Cᵀ], [C, 0]]·[Δd; μ] = [F; g] (``saddle_csr``), where the
+constraint force on the first point of a constraint is -μ.
 """
 from __future__ import annotations
 
@@ -28,6 +33,10 @@ class BlockSystem:
     pair_i: list[np.ndarray] = field(default_factory=list)
     pair_j: list[np.ndarray] = field(default_factory=list)
     pair_blocks: list[np.ndarray] = field(default_factory=list)
+    con_rows: list[np.ndarray] = field(default_factory=list)  # constraint triplets (row, col, value)
+    con_cols: list[np.ndarray] = field(default_factory=list)
+    con_vals: list[np.ndarray] = field(default_factory=list)
+    con_rhs: list[np.ndarray] = field(default_factory=list)
 
     @property
     def n_blocks(self) -> int:
@@ -36,6 +45,55 @@ class BlockSystem:
     @property
     def size(self) -> int:
         return self.n_blocks * NDOF
+
+    @property
+    def n_constraints(self) -> int:
+        return int(sum(len(g) for g in self.con_rhs))
+
+    def add_point_constraints(self, block_a: np.ndarray, t_a: np.ndarray, block_b: np.ndarray,
+                              t_b: np.ndarray | None, rhs: np.ndarray, components: np.ndarray | None = None) -> None:
+        """Add rows T_a·Δd_a - T_b·Δd_b = rhs (n, 2), one per component where ``components`` (n, 2) is True.
+
+        ``block_b == -1`` (or ``t_b`` None) ties the point to the ground.
+        Rows are numbered in the order of ``components.ravel()`` after the existing ones.
+        """
+        n = len(block_a)
+        if n == 0:
+            return
+        mask = np.ones((n, 2), dtype=bool) if components is None else np.asarray(components, dtype=bool)
+        rows = np.full((n, 2), -1)
+        rows[mask] = self.n_constraints + np.arange(int(mask.sum()))
+        pick = np.broadcast_to(mask[:, :, None], (n, 2, NDOF))
+        cols = np.broadcast_to(block_a[:, None, None] * NDOF + np.arange(NDOF), (n, 2, NDOF))
+        self.con_rows.append(np.broadcast_to(rows[:, :, None], (n, 2, NDOF))[pick])
+        self.con_cols.append(cols[pick])
+        self.con_vals.append(np.asarray(t_a, dtype=float)[pick])
+        if t_b is not None:
+            linked = np.broadcast_to((block_b >= 0)[:, None, None], (n, 2, NDOF)) & pick
+            cols_b = np.broadcast_to(np.maximum(block_b, 0)[:, None, None] * NDOF + np.arange(NDOF), (n, 2, NDOF))
+            self.con_rows.append(np.broadcast_to(rows[:, :, None], (n, 2, NDOF))[linked])
+            self.con_cols.append(cols_b[linked])
+            self.con_vals.append(-np.asarray(t_b, dtype=float)[linked])
+        self.con_rhs.append(np.asarray(rhs, dtype=float)[mask])
+
+    def constraint_matrix(self) -> sp.csr_matrix:
+        """C (nc, n) of the constraint rows."""
+        if not self.con_rows:
+            return sp.csr_matrix((0, self.size))
+        return sp.coo_matrix((np.concatenate(self.con_vals),
+                              (np.concatenate(self.con_rows), np.concatenate(self.con_cols))),
+                             shape=(self.n_constraints, self.size)).tocsr()
+
+    def full_rhs(self) -> np.ndarray:
+        """[F; g]: the block right-hand side followed by the constraint right-hand side."""
+        if not self.con_rhs:
+            return self.rhs.ravel()
+        return np.concatenate([self.rhs.ravel(), *self.con_rhs])
+
+    def saddle_csr(self) -> sp.csr_matrix:
+        """The augmented matrix [[A, Cᵀ], [C, 0]] (paper Eq. 73), symmetric indefinite."""
+        C = self.constraint_matrix()
+        return sp.bmat([[self.to_csr(), C.T], [C, None]], format="csr")
 
     def add_off_diagonal(self, bi: np.ndarray, bj: np.ndarray, blocks: np.ndarray) -> None:
         """Add K_ij blocks (and their transposes at (j, i)); bi != bj required."""
@@ -58,6 +116,8 @@ class BlockSystem:
             keep_j.append(bj[free])
             keep_b.append(blocks[free])
         self.pair_i, self.pair_j, self.pair_blocks = keep_i, keep_j, keep_b
+        for k, cols in enumerate(self.con_cols):  # a held block's columns drop out of C
+            self.con_vals[k] = np.where(fixed[cols // NDOF], 0.0, self.con_vals[k])
 
     def triplets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(rows, cols, values) of every stored entry, duplicates not summed."""

@@ -1,0 +1,162 @@
+"""Specifications of hinges, pins, springs and prescribed motion, and their flat arrays.
+
+The :class:`~srdda.model.Model` keeps lists of the specs below; ``Model.arrays``
+puts every attached point into the model's point table (so the time loop
+moves them with their blocks) and compiles :class:`ConstraintArrays`, which
+indexes those rows. Units SI.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .history import MotionHistory
+
+__all__ = ["HingeSpec", "SpringSpec", "PrescribedSpec", "ConstraintArrays", "compile_links"]
+
+
+@dataclass(frozen=True)
+class HingeSpec:
+    """Point ``point_a`` of block ``block_a`` stays on point ``point_b`` of ``block_b`` (-1: the ground).
+
+    ``correct_drift``: the constraint rows ask T_a·Δd_a - T_b·Δd_b = -(x_a - x_b),
+    closing any separation left from earlier steps; False gives the paper's
+    Eq. 72 (right-hand side 0), which lets a linearisation error accumulate.
+    """
+
+    block_a: int
+    point_a: np.ndarray
+    block_b: int
+    point_b: np.ndarray
+    correct_drift: bool = True
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class SpringSpec:
+    """A linear spring (N/m) between two block points, with an optional dashpot (N·s/m).
+
+    ``kind="axial"``: the force acts along the line of the two points,
+    k·(ℓ - rest_length) (rest_length None: the initial distance).
+    ``kind="offset"``: the force is k·(x_a - x_b - r0) in both directions, r0
+    the initial separation vector (a DDA point spring with a rest offset;
+    r0 = 0 ties the points together).
+    """
+
+    block_a: int
+    point_a: np.ndarray
+    block_b: int
+    point_b: np.ndarray
+    stiffness: float
+    rest_length: float | None = None
+    damping: float = 0.0
+    kind: str = "axial"
+
+
+@dataclass(frozen=True)
+class PrescribedSpec:
+    """A block point driven along ``history``: displacement from its start (m) or velocity (m/s).
+
+    ``components`` (bool, bool) says which of x and y are prescribed; ``by`` is
+    "multiplier" (exact, Lagrange rows) or "penalty" (a spring of
+    ``stiffness`` N/m to the moving target; None: the run's penalty).
+    """
+
+    block: int
+    point: np.ndarray
+    history: MotionHistory
+    quantity: str = "displacement"
+    components: tuple[bool, bool] = (True, True)
+    by: str = "multiplier"
+    stiffness: float | None = None
+
+
+def _rows(n: int) -> np.ndarray:
+    return np.zeros(n, dtype=np.int64)
+
+
+@dataclass(frozen=True)
+class ConstraintArrays:
+    """Flat arrays of the hinges, springs and prescribed points (rows index ``ModelArrays.points``)."""
+
+    hinge_rows_a: np.ndarray = field(default_factory=lambda: _rows(0))
+    hinge_rows_b: np.ndarray = field(default_factory=lambda: _rows(0))  # pins: the row of the pin's own point
+    hinge_block_b: np.ndarray = field(default_factory=lambda: _rows(0))  # -1 = ground
+    hinge_correct: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    hinge_names: tuple[str, ...] = ()
+    spring_rows_a: np.ndarray = field(default_factory=lambda: _rows(0))
+    spring_rows_b: np.ndarray = field(default_factory=lambda: _rows(0))
+    spring_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    spring_damping: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    spring_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))  # axial rest length
+    spring_offset: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # offset kind: r0
+    spring_axial: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    prescribed_rows: np.ndarray = field(default_factory=lambda: _rows(0))
+    prescribed_mask: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=bool))
+    prescribed_velocity: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    prescribed_multiplier: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    prescribed_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))  # nan = run's penalty
+    prescribed_histories: tuple[MotionHistory, ...] = ()
+    base_acceleration: MotionHistory | None = None
+
+    @property
+    def n_hinges(self) -> int:
+        return len(self.hinge_rows_a)
+
+    @property
+    def active(self) -> bool:
+        """True if any hinge, spring, prescribed point or base acceleration is present."""
+        return bool(self.n_hinges or len(self.spring_rows_a) or len(self.prescribed_rows)
+                    or self.base_acceleration is not None)
+
+    def prescribed_displacement(self, t: float) -> np.ndarray:
+        """Prescribed displacement (n, 2) of every prescribed point at time t (from its start)."""
+        out = np.zeros((len(self.prescribed_rows), 2))
+        for i, (hist, vel) in enumerate(zip(self.prescribed_histories, self.prescribed_velocity)):
+            out[i] = hist.integral(t) if vel else hist(t)
+        return out
+
+
+def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed: list[PrescribedSpec],
+                  base_acceleration: MotionHistory | None, first_row: int
+                  ) -> tuple[np.ndarray, np.ndarray, ConstraintArrays]:
+    """Points (n, 2), their blocks (n,) and the arrays of all links; point rows start at ``first_row``."""
+    pts: list[np.ndarray] = []
+    owners: list[int] = []
+
+    def add(block: int, point: np.ndarray) -> int:
+        pts.append(np.asarray(point, dtype=float))
+        owners.append(block)
+        return first_row + len(pts) - 1
+
+    ha = np.array([add(h.block_a, h.point_a) for h in hinges], dtype=np.int64)
+    hb = np.array([add(h.block_b, h.point_b) if h.block_b >= 0 else ha[i] for i, h in enumerate(hinges)],
+                  dtype=np.int64)
+    sa = np.array([add(s.block_a, s.point_a) for s in springs], dtype=np.int64)
+    sb = np.array([add(s.block_b, s.point_b) for s in springs], dtype=np.int64)
+    pr = np.array([add(p.block, p.point) for p in prescribed], dtype=np.int64)
+    sep = np.array([np.asarray(s.point_a, float) - np.asarray(s.point_b, float) for s in springs]).reshape(-1, 2)
+    rest = np.array([np.linalg.norm(sep[i]) if s.rest_length is None else s.rest_length
+                     for i, s in enumerate(springs)], dtype=float)
+    links = ConstraintArrays(
+        hinge_rows_a=ha, hinge_rows_b=hb,
+        hinge_block_b=np.array([h.block_b for h in hinges], dtype=np.int64),
+        hinge_correct=np.array([h.correct_drift for h in hinges], dtype=bool),
+        hinge_names=tuple(h.name for h in hinges),
+        spring_rows_a=sa, spring_rows_b=sb,
+        spring_stiffness=np.array([s.stiffness for s in springs], dtype=float),
+        spring_damping=np.array([s.damping for s in springs], dtype=float),
+        spring_rest=rest,
+        spring_offset=np.where(np.array([s.kind == "offset" for s in springs], bool)[:, None], sep, 0.0),
+        spring_axial=np.array([s.kind == "axial" for s in springs], dtype=bool),
+        prescribed_rows=pr,
+        prescribed_mask=np.array([p.components for p in prescribed], dtype=bool).reshape(-1, 2),
+        prescribed_velocity=np.array([p.quantity == "velocity" for p in prescribed], dtype=bool),
+        prescribed_multiplier=np.array([p.by == "multiplier" for p in prescribed], dtype=bool),
+        prescribed_stiffness=np.array([np.nan if p.stiffness is None else p.stiffness for p in prescribed],
+                                      dtype=float),
+        prescribed_histories=tuple(p.history for p in prescribed),
+        base_acceleration=base_acceleration,
+    )
+    return np.array(pts, dtype=float).reshape(-1, 2), np.array(owners, dtype=np.int64), links

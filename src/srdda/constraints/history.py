@@ -1,0 +1,102 @@
+"""Time histories of prescribed motion and base acceleration: constant, table, sine or callable.
+
+A :class:`MotionHistory` gives a 2-vector as a function of time t (s) and its
+time integral from 0 to t, so a velocity history becomes a displacement
+history without any state: exact for constant, table (piecewise linear) and
+sine; adaptive quadrature (``scipy.integrate.quad``) for a callable.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import quad
+
+__all__ = ["MotionHistory", "HistoryError"]
+
+
+class HistoryError(ValueError):
+    """A history is given in a form that cannot be read (the message says what is wrong)."""
+
+
+@dataclass(frozen=True)
+class MotionHistory:
+    """A vector (x, y) as a function of time.
+
+    Exactly one of: ``constant`` (x, y); ``table`` rows (t, x, y) with strictly
+    increasing t, linear interpolation, held constant outside; ``sine``:
+    amplitude (x, y), ``period`` (s) and ``phase`` (rad), value
+    amplitude·sin(2π t / period + phase); ``function`` a callable of t
+    returning (x, y).
+    """
+
+    constant: tuple[float, float] | None = None
+    table: np.ndarray | None = None
+    amplitude: tuple[float, float] | None = None
+    period: float | None = None
+    phase: float = 0.0
+    function: Callable[[float], Sequence[float]] | None = None
+
+    def __post_init__(self) -> None:
+        given = [self.constant is not None, self.table is not None, self.amplitude is not None,
+                 self.function is not None]
+        if sum(given) != 1:
+            raise HistoryError("a history is exactly one of: constant, table, sine (amplitude + period), function")
+        if self.table is not None:
+            tab = np.asarray(self.table, dtype=float)
+            if tab.ndim != 2 or tab.shape[1] != 3 or len(tab) < 1:
+                raise HistoryError("a history table has rows [t, x, y]")
+            if np.any(np.diff(tab[:, 0]) <= 0):
+                raise HistoryError("history table times must increase strictly")
+            object.__setattr__(self, "table", tab)
+        if self.amplitude is not None and not (self.period is not None and self.period > 0):
+            raise HistoryError("a sine history needs a period > 0 (s)")
+
+    @staticmethod
+    def sine(amplitude: Sequence[float], period: float, phase: float = 0.0) -> MotionHistory:
+        return MotionHistory(amplitude=(float(amplitude[0]), float(amplitude[1])), period=float(period),
+                             phase=float(phase))
+
+    @staticmethod
+    def of(value: object) -> MotionHistory:
+        """A history from a pair (constant), an (n, 3) table, a callable, or a MotionHistory."""
+        if isinstance(value, MotionHistory):
+            return value
+        if callable(value):
+            return MotionHistory(function=value)
+        arr = np.asarray(value, dtype=float)
+        if arr.shape == (2,):
+            return MotionHistory(constant=(float(arr[0]), float(arr[1])))
+        if arr.ndim == 2 and arr.shape[1] == 3:
+            return MotionHistory(table=arr)
+        raise HistoryError("a history is [x, y], a table of [t, x, y] rows, a sine, or a callable of t")
+
+    def __call__(self, t: float) -> np.ndarray:
+        if self.constant is not None:
+            return np.asarray(self.constant, dtype=float)
+        if self.table is not None:
+            tab = self.table
+            return np.array([np.interp(t, tab[:, 0], tab[:, 1]), np.interp(t, tab[:, 0], tab[:, 2])])
+        if self.amplitude is not None:
+            return np.asarray(self.amplitude) * np.sin(2.0 * np.pi * t / self.period + self.phase)
+        return np.asarray(self.function(t), dtype=float).reshape(2)
+
+    def integral(self, t: float) -> np.ndarray:
+        """∫₀ᵗ value(s) ds."""
+        if self.constant is not None:
+            return np.asarray(self.constant, dtype=float) * t
+        if self.table is not None:
+            return self._table_integral(t)
+        if self.amplitude is not None:
+            w = 2.0 * np.pi / self.period
+            return np.asarray(self.amplitude) * (np.cos(self.phase) - np.cos(w * t + self.phase)) / w
+        return np.array([quad(lambda s, i=i: self(s)[i], 0.0, t, limit=200)[0] for i in range(2)])
+
+    def _table_integral(self, t: float) -> np.ndarray:
+        tab = self.table
+        knots = np.concatenate([[0.0], tab[:, 0][(tab[:, 0] > 0) & (tab[:, 0] < t)], [t]]) if t > 0 else \
+            np.concatenate([[t], tab[:, 0][(tab[:, 0] > t) & (tab[:, 0] < 0)], [0.0]])
+        values = np.array([self(s) for s in knots])
+        area = np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(knots)[:, None], axis=0)
+        return area if t > 0 else -area
