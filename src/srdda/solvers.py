@@ -22,6 +22,7 @@ definite matrix), PARDISO (``pardiso``). See docs/constraints.md.
 from __future__ import annotations
 
 import importlib.util
+import warnings
 from typing import Protocol
 
 import numpy as np
@@ -60,17 +61,15 @@ def _saddle_superlu(system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
     return _check(lu.solve(rhs))
 
 
-def _saddle_dense(system: BlockSystem) -> np.ndarray:
-    return system.saddle_csr().toarray()
-
-
 class DenseSolver:
     name = "dense"
 
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
-        matrix = _saddle_dense(system) if system.n_constraints else system.to_dense()
+        matrix = system.saddle_dense() if system.n_constraints else system.to_dense()
         try:
-            return _check(sla.solve(matrix, rhs, assume_a="sym", check_finite=False))
+            with warnings.catch_warnings():  # stiff penalties make rcond tiny; the result is checked below
+                warnings.simplefilter("ignore", sla.LinAlgWarning)
+                return _check(sla.solve(matrix, rhs, assume_a="sym", check_finite=False))
         except (np.linalg.LinAlgError, sla.LinAlgError) as exc:
             raise SolverError(f"singular system: {exc}") from exc
 

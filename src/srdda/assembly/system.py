@@ -90,10 +90,28 @@ class BlockSystem:
             return self.rhs.ravel()
         return np.concatenate([self.rhs.ravel(), *self.con_rhs])
 
+    def _saddle_triplets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        rows, cols, vals = self.triplets()
+        n = self.size
+        cr, cc, cv = (np.concatenate(x) for x in (self.con_rows, self.con_cols, self.con_vals))
+        return (np.concatenate([rows, n + cr, cc]), np.concatenate([cols, cc, n + cr]),
+                np.concatenate([vals, cv, cv]))
+
     def saddle_csr(self) -> sp.csr_matrix:
         """The augmented matrix [[A, Cᵀ], [C, 0]] (paper Eq. 73), symmetric indefinite."""
-        C = self.constraint_matrix()
-        return sp.bmat([[self.to_csr(), C.T], [C, None]], format="csr")
+        m = self.size + self.n_constraints
+        if not self.con_rows:
+            return self.to_csr()
+        rows, cols, vals = self._saddle_triplets()
+        return sp.coo_matrix((vals, (rows, cols)), shape=(m, m)).tocsr()
+
+    def saddle_dense(self) -> np.ndarray:
+        """[[A, Cᵀ], [C, 0]] as a dense array (tiny models)."""
+        m = self.size + self.n_constraints
+        if not self.con_rows:
+            return self.to_dense()
+        rows, cols, vals = self._saddle_triplets()
+        return np.bincount(rows * m + cols, weights=vals, minlength=m * m).reshape(m, m)
 
     def add_off_diagonal(self, bi: np.ndarray, bj: np.ndarray, blocks: np.ndarray) -> None:
         """Add K_ij blocks (and their transposes at (j, i)); bi != bj required."""
