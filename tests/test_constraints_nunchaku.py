@@ -32,12 +32,14 @@ def test_hinge_closed_at_every_step(results, method):
 @pytest.mark.slow
 def test_dda1_separation_grows_like_table5(results):
     # dda1 = Shi's T at t in the rows, exact rotation in the update, paper's rhs 0 (Eq. 72):
-    # the separation accumulates. Same order as Table 5: within a factor 1.5 of the paper at every
-    # tabulated step from 100 on (the paper's 0.000001 at step 15 has one significant digit).
+    # the separation accumulates as in Table 5. Measured: within 2% of the paper at every
+    # tabulated step from 100 on (0.000222/0.000219, ..., 0.036469/0.035775); 5% allows for the
+    # modelling choices the paper leaves open (plane stress, the pin's penalty pull-back). The
+    # paper's 0.000001 at step 15 has one significant digit.
     d = nunchaku.hinge_distance(results["dda1"])
     for step, per_method in nunchaku.PAPER_TABLE5.items():
         if step >= 100:
-            assert per_method["dda1"] / 1.5 < d[step] < per_method["dda1"] * 1.5, step
+            assert d[step] == pytest.approx(per_method["dda1"], rel=0.05), step
     assert d[15] < 5e-6
     assert d[1800] > d[500] > d[100]
 
