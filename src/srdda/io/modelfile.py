@@ -15,10 +15,11 @@ import numpy as np
 import tomli_w
 from pydantic import ValidationError
 
+from ..constraints.history import HistoryError, MotionHistory
 from ..geometry.polygon import PolygonError
 from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..simulation import RunSettings
-from .schema import ModelFile
+from .schema import HistorySection, ModelFile
 
 __all__ = ["ModelFileError", "load_model", "model_from_dict", "save_model", "model_to_dict"]
 
@@ -115,6 +116,7 @@ def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
                                    _block_index(s.block_b, names, n, where("point_springs", i)))
         for i, mp in enumerate(spec.measured_points):
             model.add_measured_point(mp.at, _block_index(mp.block, names, n, where("measured_points", i)))
+        _add_links(model, spec, names, n, where)
     except ModelError as exc:
         raise ModelFileError(f"{source}: {exc}") from None
     r = spec.run
@@ -122,6 +124,77 @@ def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
                            linearization=r.linearization, penalty=r.penalty, solver=r.solver,
                            record_every=r.record_every)
     return model, settings
+
+
+def _history(h: HistorySection, where: str) -> MotionHistory:
+    given = [h.constant is not None, h.table is not None, h.amplitude is not None]
+    try:
+        if sum(given) != 1:
+            raise HistoryError("give exactly one of 'constant', 'table', or 'amplitude' with 'period'")
+        if h.table is not None:
+            return MotionHistory(table=np.array(h.table, dtype=float))
+        if h.amplitude is not None:
+            return MotionHistory(amplitude=h.amplitude, period=h.period, phase=h.phase)
+        return MotionHistory(constant=h.constant)
+    except HistoryError as exc:
+        raise ModelFileError(f"{where}.history: {exc}") from None
+
+
+def _add_links(model: Model, spec: ModelFile, names: dict[str, int], n: int, where: Any) -> None:
+    """Hinges, pins, springs, prescribed motion and base acceleration (srdda.constraints)."""
+    for i, h in enumerate(spec.hinges):
+        w = where("hinges", i)
+        model.add_hinge(h.at, _block_index(h.block_a, names, n, w), _block_index(h.block_b, names, n, w), h.at_b,
+                        h.correct_drift, h.name)
+    for i, p in enumerate(spec.pins):
+        model.add_pin(p.at, _block_index(p.block, names, n, where("pins", i)), p.correct_drift, p.name)
+    for i, s in enumerate(spec.springs):
+        w = where("springs", i)
+        model.add_spring(s.a, s.b, s.stiffness, s.rest_length, s.damping, s.kind,
+                         _block_index(s.block_a, names, n, w), _block_index(s.block_b, names, n, w))
+    for i, pm in enumerate(spec.prescribed_motion):
+        w = where("prescribed_motion", i)
+        model.add_prescribed_motion(pm.at, _history(pm.history, w), pm.quantity, pm.components, pm.by, pm.stiffness,
+                                    _block_index(pm.block, names, n, w))
+    if spec.base_acceleration is not None:
+        model.set_base_acceleration(_history(spec.base_acceleration, "base_acceleration"))
+
+
+def _history_dict(h: MotionHistory, what: str) -> dict[str, Any]:
+    if h.function is not None:
+        raise ModelFileError(f"{what} is a Python callable and cannot be written to a file")
+    if h.table is not None:
+        return {"table": np.asarray(h.table).tolist()}
+    if h.amplitude is not None:
+        return {"amplitude": list(h.amplitude), "period": h.period, "phase": h.phase}
+    return {"constant": list(h.constant)}
+
+
+def _links_dict(model: Model) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    hinges = [h for h in model.hinges if h.block_b >= 0]
+    pins = [h for h in model.hinges if h.block_b < 0]
+    if hinges:
+        out["hinges"] = [{"at": _pt(h.point_a), "at_b": _pt(h.point_b), "block_a": h.block_a, "block_b": h.block_b,
+                          "correct_drift": h.correct_drift, "name": h.name} for h in hinges]
+    if pins:
+        out["pins"] = [{"at": _pt(h.point_a), "block": h.block_a, "correct_drift": h.correct_drift, "name": h.name}
+                       for h in pins]
+    if model.springs:
+        out["springs"] = [{"a": _pt(s.point_a), "b": _pt(s.point_b), "block_a": s.block_a, "block_b": s.block_b,
+                           "stiffness": s.stiffness, "damping": s.damping, "kind": s.kind,
+                           **({} if s.rest_length is None else {"rest_length": s.rest_length})}
+                          for s in model.springs]
+    if model.prescribed:
+        out["prescribed_motion"] = [
+            {"at": _pt(p.point), "block": p.block, "history": _history_dict(p.history, f"prescribed motion at "
+                                                                                     f"{_pt(p.point)}"),
+             "quantity": p.quantity, "components": "x" * p.components[0] + "y" * p.components[1], "by": p.by,
+             **({} if p.stiffness is None else {"stiffness": p.stiffness})}
+            for p in model.prescribed]
+    if model.base_acceleration is not None:
+        out["base_acceleration"] = _history_dict(model.base_acceleration, "base acceleration")
+    return out
 
 
 def load_model(path: str | Path) -> tuple[Model, RunSettings]:
@@ -195,6 +268,7 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
                                 for a, pa, b, pb, k in model.point_springs]
     if model.measured_points:
         out["measured_points"] = [{"at": _pt(p), "block": i} for i, p in model.measured_points]
+    out.update(_links_dict(model))
     return out
 
 

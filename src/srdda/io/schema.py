@@ -13,7 +13,8 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_valida
 from .units import to_si
 
 __all__ = ["ModelFile", "RunSection", "MaterialSection", "BlockSection", "PointRef", "FixedPointSection",
-           "PointLoadSection", "PointSpringSection", "MeasuredPointSection", "JointMaterialSection"]
+           "PointLoadSection", "PointSpringSection", "MeasuredPointSection", "JointMaterialSection",
+           "HingeSection", "PinSection", "SpringSection", "HistorySection", "PrescribedMotionSection"]
 
 
 def _unit(kind: str) -> BeforeValidator:
@@ -104,6 +105,64 @@ class MeasuredPointSection(PointRef):
     pass
 
 
+class HingeSection(_Strict):
+    """Point ``at`` of block_a kept exactly on point ``at_b`` (default ``at``) of block_b."""
+
+    at: Point
+    at_b: Point | None = None
+    block_a: str | int | None = None
+    block_b: str | int | None = None
+    correct_drift: bool = True
+    name: str = ""
+
+
+class PinSection(PointRef):
+    """A block point pinned exactly to the ground (Lagrange multipliers)."""
+
+    correct_drift: bool = True
+    name: str = ""
+
+
+class SpringSection(_Strict):
+    """A linear spring with optional dashpot between two block points (srdda.constraints.springs)."""
+
+    a: Point
+    b: Point
+    block_a: str | int | None = None
+    block_b: str | int | None = None
+    stiffness: Stiffness = Field(gt=0)
+    rest_length: float | None = Field(None, ge=0)
+    damping: float = Field(0.0, ge=0)  # N·s/m
+    kind: Literal["axial", "offset"] = "axial"
+
+
+class HistorySection(_Strict):
+    """A time history: exactly one of constant [x, y], table [[t, x, y], ...], or sine (amplitude, period)."""
+
+    constant: Point | None = None
+    table: list[tuple[Time, float, float]] | None = None
+    amplitude: Point | None = None
+    period: Time | None = Field(None, gt=0)
+    phase: float = 0.0  # rad
+
+    @field_validator("table")
+    @classmethod
+    def _increasing(cls, v: list[tuple[float, float, float]] | None) -> list[tuple[float, float, float]] | None:
+        if v is not None and any(b[0] <= a[0] for a, b in zip(v, v[1:])):
+            raise ValueError("table times must increase strictly")
+        return v
+
+
+class PrescribedMotionSection(PointRef):
+    """A driven block point: displacement (m, from its start) or velocity (m/s) history."""
+
+    history: HistorySection
+    quantity: Literal["displacement", "velocity"] = "displacement"
+    components: Literal["x", "y", "xy"] = "xy"
+    by: Literal["multiplier", "penalty"] = "multiplier"
+    stiffness: Stiffness | None = Field(None, gt=0)
+
+
 class ModelFile(_Strict):
     """The whole model file."""
 
@@ -118,3 +177,8 @@ class ModelFile(_Strict):
     point_loads: list[PointLoadSection] = []
     point_springs: list[PointSpringSection] = []
     measured_points: list[MeasuredPointSection] = []
+    hinges: list[HingeSection] = []
+    pins: list[PinSection] = []
+    springs: list[SpringSection] = []
+    prescribed_motion: list[PrescribedMotionSection] = []
+    base_acceleration: HistorySection | None = None
