@@ -86,3 +86,14 @@ def test_multipliers_are_the_hinge_force(results):
     # strain-rate terms of the block equations (E = 2e10) are below 1e-6 of the forces.
     assert force_on_b1[1] == pytest.approx(-f_on_b2c_y, rel=1e-6)
     assert abs(force_on_b1[1]) > 100.0
+
+
+def test_constraint_consistent_post_adjustment_closes_the_hinge():
+    # "dda1-secant": dda1 (Shi's scheme, exact-rotation update, additive stress) with the secant
+    # linearisation, so the rows use T_sec at the converged rotation: the hinge stays closed
+    from dataclasses import replace
+
+    model, settings = nunchaku.build("dda1", 600)
+    result = run(model, replace(settings, linearization="secant"))
+    assert result.completed
+    assert nunchaku.hinge_distance(result).max() <= 1e-9
