@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+import srdda
 from srdda import run
 from srdda.paper import nunchaku
 
@@ -77,7 +78,8 @@ def test_multipliers_are_the_hinge_force(results):
     # translational equation m·a = m·g + F_hinge(on B2C). With the first step's velocity
     # V1 = 2Δd/Δt (Shi/paper at ρ∞=1, V0 = 0): F_on_B2C = m(V1_y/Δt... ) averaged over the step.
     res = results["srdda"]
-    force_on_b1 = -res.multipliers[1][:2]
+    assert res.array("multipliers").shape == (1801, 2)  # one hinge: (x, y) rows every step
+    force_on_b1 = srdda.hinge_forces(nunchaku.build("srdda")[0].arrays().links, res.multipliers[1])[0]
     v1 = res.velocity[1][1]  # B2C generalized velocity after step 1
     dt = 0.002
     # Shi's scheme: M(V1 - V0)/Δt = F_total  ->  F_hinge_on_B2C = m V1_y/Δt - m g_y

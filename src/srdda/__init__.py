@@ -11,6 +11,7 @@ post-adjusted rotations (``dda1``) and SRDDA (``srdda``). SI units throughout.
 >>> res.completed
 True
 """
+from .constraints import MotionHistory, hinge_forces
 from .geometry import PolygonError, block_moments
 from .integrators import METHODS, Method, TimeScheme, method_preset
 from .model import Load, Material, Model, ModelError
@@ -21,7 +22,8 @@ from .io.results_store import ResultsStore, StoredResult, read_results, resume
 __version__ = "0.1.0"
 
 __all__ = [
-    "METHODS", "DivergenceError", "Load", "Material", "Method", "Model", "ModelError", "PolygonError",
+    "METHODS", "DivergenceError", "Load", "Material", "Method", "Model", "ModelError", "MotionHistory",
+    "PolygonError", "hinge_forces",
     "Result", "RunSettings", "State", "TimeScheme", "available_solvers", "block_moments", "get_solver",
     "method_preset", "run", "__version__", "ResultsStore", "StoredResult", "read_results", "resume",
 ]

@@ -206,7 +206,7 @@ def initial_state(arrays: ModelArrays, method: Method) -> State:
     velocity = arrays.velocity.copy()
     velocity[arrays.block_fixed] = 0.0
     return State(0, 0.0, arrays.vertices.copy(), arrays.points.copy(), velocity, acc,
-                 arrays.stress.copy(), np.zeros(arrays.n_blocks), mom)
+                 arrays.stress.copy(), np.zeros(arrays.n_blocks), mom, np.zeros(arrays.links.n_multipliers))
 
 
 def _point_terms(arrays: ModelArrays, state: State, lever: np.ndarray, theta: np.ndarray | None,

@@ -105,6 +105,11 @@ class ConstraintArrays:
         return len(self.hinge_rows_a)
 
     @property
+    def n_multipliers(self) -> int:
+        """Constraint rows (multipliers) per step: 2 per hinge or pin, then the driven components."""
+        return 2 * self.n_hinges + int(self.prescribed_mask[self.prescribed_multiplier].sum())
+
+    @property
     def active(self) -> bool:
         """True if any hinge, spring, prescribed point or base acceleration is present."""
         return bool(self.n_hinges or len(self.spring_rows_a) or len(self.prescribed_rows)
