@@ -62,3 +62,17 @@ def test_bad_links_name_the_field():
         model_from_dict(_minimal(pins=[{"at": [0.5, 0.5], "block": "nope"}]))
     with pytest.raises(ModelFileError, match="cannot tell which blocks"):
         model_from_dict(_minimal(hinges=[{"at": [0.5, 0.5]}]))
+
+
+def test_hinged_wall_example_runs_and_keeps_its_hinge():
+    model, settings = load_model(EXAMPLES.parent / "constraints" / "hinged-wall.toml")
+    from dataclasses import replace
+
+    from srdda import run
+
+    res = run(model, replace(settings, n_steps=300))
+    assert res.completed
+    toe = res.final_state.points[0]
+    assert np.allclose(toe, [0.4, 0.0], atol=1e-12)  # hinge to the fixed foundation: exact
+    e = res.energy[-1]
+    assert e["work_loads"] != 0.0 and e["dissipated"] > 0.0

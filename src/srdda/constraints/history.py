@@ -94,9 +94,11 @@ class MotionHistory:
         return np.array([quad(lambda s, i=i: self(s)[i], 0.0, t, limit=200)[0] for i in range(2)])
 
     def _table_integral(self, t: float) -> np.ndarray:
+        """Exact integral of the piecewise-linear (held at the ends) table from 0 to t, vectorised."""
         tab = self.table
-        knots = np.concatenate([[0.0], tab[:, 0][(tab[:, 0] > 0) & (tab[:, 0] < t)], [t]]) if t > 0 else \
-            np.concatenate([[t], tab[:, 0][(tab[:, 0] > t) & (tab[:, 0] < 0)], [0.0]])
-        values = np.array([self(s) for s in knots])
+        lo, hi = min(0.0, t), max(0.0, t)
+        inner = tab[:, 0][(tab[:, 0] > lo) & (tab[:, 0] < hi)]
+        knots = np.concatenate([[lo], inner, [hi]])
+        values = np.column_stack([np.interp(knots, tab[:, 0], tab[:, 1]), np.interp(knots, tab[:, 0], tab[:, 2])])
         area = np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(knots)[:, None], axis=0)
-        return area if t > 0 else -area
+        return area if t >= 0 else -area
