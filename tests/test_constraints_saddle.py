@@ -84,3 +84,11 @@ def test_pin_exact_under_every_scheme(scheme):
     res = run(m, RunSettings(dt=2e-3, n_steps=100, method="srdda", scheme=scheme, rho_inf=0.8))
     assert res.completed
     assert np.allclose(res.final_state.points[0], [0.0, 0.0], atol=1e-12)
+
+
+def test_hinged_block_pairs():
+    m = _bar_model()
+    m.add_block([[1, -0.05], [2, -0.05], [2, 0.05], [1, 0.05]], "bar")
+    m.add_pin((0.0, 0.0), block=0)
+    m.add_hinge((1.0, 0.0), block_a=0, block_b=1)
+    assert m.arrays().links.hinged_block_pairs.tolist() == [[0, 1]]

@@ -233,7 +233,12 @@ def _point_terms(arrays: ModelArrays, state: State, lever: np.ndarray, theta: np
 def advance(arrays: ModelArrays, state: State, method: Method, dt: float, penalty: float,
             solver: LinearSolver, secant_tolerance: float = 1e-13, secant_max_iterations: int = 8,
             terms: Sequence[StepTerm] = ()) -> tuple[State, int]:
-    """One time step from ``state``; returns the new state and the number of solves."""
+    """One time step from ``state``; returns the new state and the number of solves.
+
+    The model's hinges, pins, springs, driven points and base acceleration
+    (:func:`srdda.constraints.step_terms`) come before ``terms``.
+    """
+    terms = [*step_terms(arrays), *terms]
     coeffs = method.scheme.coefficients(dt)
     mom = state.moments
     area = mom.area
@@ -349,13 +354,12 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     sinks: list[Recorder] = [result, *recorders]
     for sink in sinks:
         sink.record(arrays, state, settings.penalty, 0)
-    terms = step_terms(arrays)
     last_step = state.step + settings.n_steps
     status = "completed"
     while state.step < last_step:
         try:
             state, solves = advance(arrays, state, method, settings.dt, settings.penalty, solver,
-                                    settings.secant_tolerance, settings.secant_max_iterations, terms)
+                                    settings.secant_tolerance, settings.secant_max_iterations)
         except DivergenceError as exc:
             status = f"diverged: {exc}"
             break

@@ -82,6 +82,7 @@ class ConstraintArrays:
 
     hinge_rows_a: np.ndarray = field(default_factory=lambda: _rows(0))
     hinge_rows_b: np.ndarray = field(default_factory=lambda: _rows(0))  # pins: the row of the pin's own point
+    hinge_block_a: np.ndarray = field(default_factory=lambda: _rows(0))
     hinge_block_b: np.ndarray = field(default_factory=lambda: _rows(0))  # -1 = ground
     hinge_correct: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     hinge_names: tuple[str, ...] = ()
@@ -103,6 +104,12 @@ class ConstraintArrays:
     @property
     def n_hinges(self) -> int:
         return len(self.hinge_rows_a)
+
+    @property
+    def hinged_block_pairs(self) -> np.ndarray:
+        """(n, 2) block pairs joined by a hinge (for a contact search that should skip them)."""
+        linked = self.hinge_block_b >= 0
+        return np.column_stack([self.hinge_block_a[linked], self.hinge_block_b[linked]])
 
     @property
     def n_multipliers(self) -> int:
@@ -146,6 +153,7 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
                      for i, s in enumerate(springs)], dtype=float)
     links = ConstraintArrays(
         hinge_rows_a=ha, hinge_rows_b=hb,
+        hinge_block_a=np.array([h.block_a for h in hinges], dtype=np.int64),
         hinge_block_b=np.array([h.block_b for h in hinges], dtype=np.int64),
         hinge_correct=np.array([h.correct_drift for h in hinges], dtype=bool),
         hinge_names=tuple(h.name for h in hinges),
