@@ -353,7 +353,8 @@ class Model:
     def add_prescribed_motion(self, point: Sequence[float], history: object, quantity: str = "displacement",
                               components: str = "xy", by: str = "multiplier", stiffness: float | None = None,
                               block: int | None = None) -> None:
-        """Drive a block point: ``history`` of displacement (m, from its start) or velocity (m/s).
+        """Drive a block point: ``history`` of displacement (m, from its start), velocity (m/s) or
+        acceleration (m/s², starting from rest: a shaking table or an earthquake record at a support).
 
         ``history``: [x, y] constant, [[t, x, y], ...] table, ``MotionHistory.sine(...)`` or a callable
         of t; ``components`` "x", "y" or "xy"; ``by`` "multiplier" (exact) or "penalty" (``stiffness``
@@ -362,8 +363,8 @@ class Model:
         b, p = self._resolve(point, block, "prescribed point")
         if self.blocks[b].fixed:
             raise ModelError(f"prescribed point: block {self.blocks[b].name!r} is fixed")
-        if quantity not in ("displacement", "velocity"):
-            raise ModelError(f"prescribed quantity must be 'displacement' or 'velocity', got {quantity!r}")
+        if quantity not in ("displacement", "velocity", "acceleration"):
+            raise ModelError(f"prescribed quantity must be 'displacement', 'velocity' or 'acceleration', got {quantity!r}")
         if components not in ("x", "y", "xy"):
             raise ModelError(f"prescribed components must be 'x', 'y' or 'xy', got {components!r}")
         if by not in ("multiplier", "penalty"):

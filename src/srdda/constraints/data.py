@@ -56,7 +56,8 @@ class SpringSpec:
 
 @dataclass(frozen=True)
 class PrescribedSpec:
-    """A block point driven along ``history``: displacement from its start (m) or velocity (m/s).
+    """A block point driven along ``history``: displacement from its start (m), velocity (m/s) or
+    acceleration (m/s², from rest: a shaking table or an earthquake record at a support).
 
     ``components`` (bool, bool) says which of x and y are prescribed; ``by`` is
     "multiplier" (exact, Lagrange rows) or "penalty" (a spring of
@@ -95,7 +96,7 @@ class ConstraintArrays:
     spring_axial: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     prescribed_rows: np.ndarray = field(default_factory=lambda: _rows(0))
     prescribed_mask: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=bool))
-    prescribed_velocity: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    prescribed_order: np.ndarray = field(default_factory=lambda: _rows(0))  # 0 displacement, 1 velocity, 2 acceleration
     prescribed_multiplier: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     prescribed_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))  # nan = run's penalty
     prescribed_histories: tuple[MotionHistory, ...] = ()
@@ -125,8 +126,8 @@ class ConstraintArrays:
     def prescribed_displacement(self, t: float) -> np.ndarray:
         """Prescribed displacement (n, 2) of every prescribed point at time t (from its start)."""
         out = np.zeros((len(self.prescribed_rows), 2))
-        for i, (hist, vel) in enumerate(zip(self.prescribed_histories, self.prescribed_velocity)):
-            out[i] = hist.integral(t) if vel else hist(t)
+        for i, (hist, order) in enumerate(zip(self.prescribed_histories, self.prescribed_order)):
+            out[i] = hist(t) if order == 0 else hist.integral(t) if order == 1 else hist.double_integral(t)
         return out
 
 
@@ -165,7 +166,8 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
         spring_axial=np.array([s.kind == "axial" for s in springs], dtype=bool),
         prescribed_rows=pr,
         prescribed_mask=np.array([p.components for p in prescribed], dtype=bool).reshape(-1, 2),
-        prescribed_velocity=np.array([p.quantity == "velocity" for p in prescribed], dtype=bool),
+        prescribed_order=np.array([("displacement", "velocity", "acceleration").index(p.quantity) for p in prescribed],
+                                  dtype=np.int64),
         prescribed_multiplier=np.array([p.by == "multiplier" for p in prescribed], dtype=bool),
         prescribed_stiffness=np.array([np.nan if p.stiffness is None else p.stiffness for p in prescribed],
                                       dtype=float),

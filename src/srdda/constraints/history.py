@@ -1,9 +1,11 @@
 """Time histories of prescribed motion and base acceleration: constant, table, sine or callable.
 
-A :class:`MotionHistory` gives a 2-vector as a function of time t (s) and its
-time integral from 0 to t, so a velocity history becomes a displacement
-history without any state: exact for constant, table (piecewise linear) and
-sine; adaptive quadrature (``scipy.integrate.quad``) for a callable.
+A :class:`MotionHistory` gives a 2-vector as a function of time t (s), its
+time integral from 0 to t and its double integral ∫₀ᵗ∫₀ˢ = ∫₀ᵗ (t - r)·value(r) dr,
+so a velocity or acceleration history becomes a displacement history without
+any state (starting from rest): exact for constant, table (piecewise linear:
+Simpson's rule is exact for the quadratic integrand of each segment) and sine;
+adaptive quadrature (``scipy.integrate.quad``) for a callable.
 """
 from __future__ import annotations
 
@@ -92,6 +94,27 @@ class MotionHistory:
             w = 2.0 * np.pi / self.period
             return np.asarray(self.amplitude) * (np.cos(self.phase) - np.cos(w * t + self.phase)) / w
         return np.array([quad(lambda s, i=i: self(s)[i], 0.0, t, limit=200)[0] for i in range(2)])
+
+    def double_integral(self, t: float) -> np.ndarray:
+        """∫₀ᵗ ∫₀ˢ value(r) dr ds = ∫₀ᵗ (t - r)·value(r) dr (displacement from rest of an acceleration)."""
+        if self.constant is not None:
+            return np.asarray(self.constant, dtype=float) * 0.5 * t * t
+        if self.table is not None:
+            tab = self.table
+            lo, hi = min(0.0, t), max(0.0, t)
+            knots = np.concatenate([[lo], tab[:, 0][(tab[:, 0] > lo) & (tab[:, 0] < hi)], [hi]])
+            mid = 0.5 * (knots[1:] + knots[:-1])
+            pts = np.concatenate([knots, mid])
+            vals = np.column_stack([np.interp(pts, tab[:, 0], tab[:, 1]), np.interp(pts, tab[:, 0], tab[:, 2])])
+            f = (t - pts)[:, None] * vals
+            n = len(knots)
+            seg = np.diff(knots)[:, None] / 6.0 * (f[: n - 1] + 4.0 * f[n:] + f[1:n])
+            return np.sum(seg, axis=0) * (1.0 if t >= 0 else -1.0)
+        if self.amplitude is not None:
+            w = 2.0 * np.pi / self.period
+            p = self.phase
+            return np.asarray(self.amplitude) * (t * np.cos(p) / w - (np.sin(w * t + p) - np.sin(p)) / w**2)
+        return np.array([quad(lambda r, i=i: (t - r) * self(r)[i], 0.0, t, limit=200)[0] for i in range(2)])
 
     def _table_integral(self, t: float) -> np.ndarray:
         """Exact integral of the piecewise-linear (held at the ends) table from 0 to t, vectorised."""

@@ -157,7 +157,7 @@ class PrescribedMotionSection(PointRef):
     """A driven block point: displacement (m, from its start) or velocity (m/s) history."""
 
     history: HistorySection
-    quantity: Literal["displacement", "velocity"] = "displacement"
+    quantity: Literal["displacement", "velocity", "acceleration"] = "displacement"
     components: Literal["x", "y", "xy"] = "xy"
     by: Literal["multiplier", "penalty"] = "multiplier"
     stiffness: Stiffness | None = Field(None, gt=0)
