@@ -67,8 +67,9 @@ class DenseSolver:
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
         matrix = system.saddle_dense() if system.n_constraints else system.to_dense()
         try:
-            with warnings.catch_warnings():  # stiff penalties make rcond tiny; the result is checked below
-                warnings.simplefilter("ignore", sla.LinAlgWarning)
+            with warnings.catch_warnings():
+                if system.n_constraints:  # O(1) constraint rows beside stiff penalties: rcond ~1e-23 by scaling
+                    warnings.simplefilter("ignore", sla.LinAlgWarning)
                 return _check(sla.solve(matrix, rhs, assume_a="sym", check_finite=False))
         except (np.linalg.LinAlgError, sla.LinAlgError) as exc:
             raise SolverError(f"singular system: {exc}") from exc
