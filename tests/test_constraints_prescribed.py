@@ -200,3 +200,15 @@ def test_penalty_drive_work_balances_energy():
     peak = max(e["kinetic"] for e in res.energy)
     assert peak > 50.0
     assert max(abs(e["balance"]) for e in res.energy) < 0.01 * peak
+
+
+def test_points_sharing_a_record_share_its_evaluation():
+    m = _free_block()
+    m.add_block([[2, 0], [3, 0], [3, 1], [2, 1]], "rock")
+    record = MotionHistory.sine((0.01, 0.0), 0.2)
+    m.add_prescribed_motion((0.5, 0.5), record, block=0)
+    m.add_prescribed_motion((2.5, 0.5), record, block=1)
+    m.add_prescribed_motion((2.2, 0.2), record, quantity="velocity", components="y", block=1)
+    links = m.arrays().links
+    assert len(links.prescribed_sources) == 2 and links.prescribed_source.tolist() == [0, 0, 1]
+    assert np.allclose(links.prescribed_displacement(0.05), [record(0.05), record(0.05), record.integral(0.05)])

@@ -100,6 +100,8 @@ class ConstraintArrays:
     prescribed_multiplier: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     prescribed_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))  # nan = run's penalty
     prescribed_histories: tuple[MotionHistory, ...] = ()
+    prescribed_sources: tuple[tuple[MotionHistory, int], ...] = ()  # distinct (history, order) pairs
+    prescribed_source: np.ndarray = field(default_factory=lambda: _rows(0))  # source of each prescribed point
     base_acceleration: MotionHistory | None = None
 
     @property
@@ -124,10 +126,23 @@ class ConstraintArrays:
                     or self.base_acceleration is not None)
 
     def prescribed_displacement(self, t: float) -> np.ndarray:
-        """Prescribed displacement (n, 2) of every prescribed point at time t (from its start)."""
-        out = np.zeros((len(self.prescribed_rows), 2))
-        for i, (hist, order) in enumerate(zip(self.prescribed_histories, self.prescribed_order)):
-            out[i] = hist(t) if order == 0 else hist.integral(t) if order == 1 else hist.double_integral(t)
+        """Prescribed displacement (n, 2) of every prescribed point at time t (from its start).
+
+        Each distinct (history, quantity) source is evaluated once (many support points
+        usually share one record) and spread to its points by ``prescribed_source``.
+        """
+        if not len(self.prescribed_rows):
+            return np.zeros((0, 2))
+        values = np.array([h(t) if order == 0 else h.integral(t) if order == 1 else h.double_integral(t)
+                           for h, order in self.prescribed_sources])
+        return values[self.prescribed_source]
+        keys = [(id(h), int(o)) for h, o in zip(self.prescribed_histories, self.prescribed_order)]
+        unique = {k: i for i, k in enumerate(keys)}  # last index of each distinct pair
+        for first in unique.values():
+            hist, order = self.prescribed_histories[first], self.prescribed_order[first]
+            value = hist(t) if order == 0 else hist.integral(t) if order == 1 else hist.double_integral(t)
+            same = [j for j, k in enumerate(keys) if k == keys[first]]
+            out[same] = value
         return out
 
 
@@ -152,6 +167,13 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
     sep = np.array([np.asarray(s.point_a, float) - np.asarray(s.point_b, float) for s in springs]).reshape(-1, 2)
     rest = np.array([np.linalg.norm(sep[i]) if s.rest_length is None else s.rest_length
                      for i, s in enumerate(springs)], dtype=float)
+    orders = [("displacement", "velocity", "acceleration").index(p.quantity) for p in prescribed]
+    keys: list[tuple[int, int]] = []
+    sources: list[tuple[MotionHistory, int]] = []
+    for p, order in zip(prescribed, orders):
+        if (id(p.history), order) not in keys:
+            keys.append((id(p.history), order))
+            sources.append((p.history, order))
     links = ConstraintArrays(
         hinge_rows_a=ha, hinge_rows_b=hb,
         hinge_block_a=np.array([h.block_a for h in hinges], dtype=np.int64),
@@ -166,12 +188,14 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
         spring_axial=np.array([s.kind == "axial" for s in springs], dtype=bool),
         prescribed_rows=pr,
         prescribed_mask=np.array([p.components for p in prescribed], dtype=bool).reshape(-1, 2),
-        prescribed_order=np.array([("displacement", "velocity", "acceleration").index(p.quantity) for p in prescribed],
-                                  dtype=np.int64),
+        prescribed_order=np.array(orders, dtype=np.int64),
         prescribed_multiplier=np.array([p.by == "multiplier" for p in prescribed], dtype=bool),
         prescribed_stiffness=np.array([np.nan if p.stiffness is None else p.stiffness for p in prescribed],
                                       dtype=float),
         prescribed_histories=tuple(p.history for p in prescribed),
+        prescribed_sources=tuple(sources),
+        prescribed_source=np.array([keys.index((id(p.history), order)) for p, order in zip(prescribed, orders)],
+                                   dtype=np.int64),
         base_acceleration=base_acceleration,
     )
     return np.array(pts, dtype=float).reshape(-1, 2), np.array(owners, dtype=np.int64), links
