@@ -40,6 +40,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from ..constraints import LEDGER
+from ..constraints.data import links_from_flat, links_to_flat
 from ..model import Load, Model, ModelArrays
 from ..simulation import Result, RunSettings, State, energies, measured_points, run
 from .checkpoint import append_checkpoint, checkpoint_count, read_checkpoint, truncate_checkpoints
@@ -49,7 +51,7 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state",
 
 FORMAT = "srdda-results"
 FORMAT_VERSION = 1
-ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "total")
+ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "total", *LEDGER, "balance")
 
 ContactProvider = Callable[[ModelArrays, State], Mapping[str, np.ndarray] | None]
 """Hook for contact output: per-contact arrays (first axis = contact) of one state, or None.
@@ -142,6 +144,10 @@ def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None)
         value = getattr(arrays, f.name)
         if isinstance(value, np.ndarray):
             group.create_dataset(f.name, data=value)
+    links, links_meta = links_to_flat(arrays.links)  # hinges, springs, driven points (srdda.constraints)
+    for name, value in links.items():
+        group.create_dataset(f"links.{name}", data=value)
+    group.attrs["links"] = json.dumps(links_meta)
     group.attrs["block_names"] = json.dumps(list(arrays.block_names))
     group.attrs["loads"] = json.dumps([_load_to_json(ld) for ld in arrays.loads])
     if model_text is not None:
@@ -163,6 +169,12 @@ def model_arrays_from_file(path: str | Path) -> ModelArrays:
             elif f_.name == "loads":
                 kwargs[f_.name] = tuple(Load(constant=tuple(ld["constant"])) if "constant" in ld
                                         else Load(table=np.asarray(ld["table"], dtype=float)) for ld in loads_json)
+            elif f_.name == "links" and "links" in g.attrs:
+                try:
+                    kwargs["links"] = links_from_flat({k[6:]: g[k][()] for k in g if k.startswith("links.")},
+                                                      json.loads(g.attrs["links"]))
+                except ValueError as exc:
+                    raise ResultsFileError(f"{path}: {exc}; pass the model to resume(..., model=...)") from None
             elif f_.name in g:
                 kwargs[f_.name] = g[f_.name][()]
             else:
@@ -229,6 +241,8 @@ class ResultsStore:
                "area": mom.area, "rotation": state.rotation, "velocity": state.velocity, "stress": state.stress,
                "vertices": state.vertices, "measured_position": pos, "measured_velocity": vel,
                "energy": np.array([e[k] for k in ENERGY_NAMES]), "iterations": np.int64(solves)}
+        if arrays.links.n_multipliers:  # constraint forces, one row per step (srdda.constraints)
+            row["multipliers"] = state.multipliers
         for name, value in row.items():
             self._buffer.setdefault(name, []).append(np.array(value, copy=True))
         if self.contact_provider is not None and state.step % self.contact_every == 0:
