@@ -10,6 +10,10 @@ MASS = RHO * L * H
 INERTIA = MASS * (L * L + H * H) / 12.0  # about the centroid, rectangle
 ARM = L / 2  # pivot/hinge to centroid, along the bar axis
 
+# Blocks joined by a hinge share an edge; these tests are about the hinge alone, so the block-contact
+# search (issue 3) is switched off where RunSettings has the switch.
+NO_CONTACTS = {"contacts": False} if "contacts" in RunSettings.__dataclass_fields__ else {}
+
 
 def _model():
     m = Model(gravity=(0.0, -G))
@@ -35,7 +39,7 @@ def _equations(t, y):
 @pytest.mark.slow
 def test_two_link_pendulum_matches_solve_ivp():
     dt = 1e-3
-    result = run(_model(), RunSettings(dt=dt, n_steps=1000, method="srdda"))
+    result = run(_model(), RunSettings(dt=dt, n_steps=1000, method="srdda", **NO_CONTACTS))
     assert result.completed
     t = np.minimum(np.array(result.time), 1.0)
     ref = solve_ivp(_equations, (0.0, 1.0), [0.0, 0.0, 0.0, 0.0], t_eval=t, rtol=1e-11, atol=1e-12)

@@ -8,6 +8,10 @@ from srdda import Material, Model, MotionHistory, RunSettings, run
 from srdda.io.results_store import ResultsFileError, ResultsStore, load_checkpoint, model_arrays_from_file, \
     read_results
 
+# Blocks joined by a hinge share an edge; these tests are about the hinge alone, so the block-contact
+# search (issue 3) is switched off where RunSettings has the switch.
+NO_CONTACTS = {"contacts": False} if "contacts" in RunSettings.__dataclass_fields__ else {}
+
 
 def _model(callable_drive=False):
     m = Model(gravity=(0.0, -10.0))
@@ -27,7 +31,7 @@ def _model(callable_drive=False):
 
 
 def test_stored_links_rebuild_and_resume_matches(tmp_path):
-    settings = RunSettings(dt=1e-3, n_steps=40, method="srdda")
+    settings = RunSettings(dt=1e-3, n_steps=40, method="srdda", **NO_CONTACTS)
     path = tmp_path / "run.h5"
     full = run(_model(), settings, recorders=[ResultsStore(path, settings, flush_every=10)])
     arrays = model_arrays_from_file(path)
@@ -50,7 +54,7 @@ def test_stored_links_rebuild_and_resume_matches(tmp_path):
 
 
 def test_callable_history_cannot_be_stored_but_says_so(tmp_path):
-    settings = RunSettings(dt=1e-3, n_steps=3)
+    settings = RunSettings(dt=1e-3, n_steps=3, **NO_CONTACTS)
     path = tmp_path / "run.h5"
     run(_model(callable_drive=True), settings, recorders=[ResultsStore(path, settings)])
     with pytest.raises(ResultsFileError, match="Python function"):

@@ -6,6 +6,10 @@ from srdda import Material, Model, RunSettings, run
 from srdda.assembly.system import BlockSystem
 from srdda.solvers import get_solver
 
+# Blocks joined by a hinge share an edge; these tests are about the hinge alone, so the block-contact
+# search (issue 3) is switched off where RunSettings has the switch.
+NO_CONTACTS = {"contacts": False} if "contacts" in RunSettings.__dataclass_fields__ else {}
+
 
 def _random_system(nb=5, seed=0):
     rng = np.random.default_rng(seed)
@@ -61,7 +65,7 @@ def test_hinge_to_a_fixed_block_is_a_pin():
     m = _bar_model()
     m.add_block([[-1, -0.5], [0, -0.5], [0, 0.5], [-1, 0.5]], "bar", fixed=True)
     m.add_hinge((0.0, 0.0), block_a=0, block_b=1)
-    res = run(m, RunSettings(dt=1e-3, n_steps=200, method="srdda"))
+    res = run(m, RunSettings(dt=1e-3, n_steps=200, method="srdda", **NO_CONTACTS))
     assert res.completed
     assert np.allclose(res.final_state.points[0], [0.0, 0.0], atol=1e-12)
     assert res.final_state.rotation[0] < -0.1  # it swings
