@@ -99,3 +99,14 @@ def test_constraint_consistent_post_adjustment_closes_the_hinge():
     result = run(model, replace(settings, linearization="secant"))
     assert result.completed
     assert nunchaku.hinge_distance(result).max() <= 1e-9
+
+
+@pytest.mark.parametrize("method", ["dda0", "srdda"])
+def test_sparse_saddle_solver_keeps_the_hinge(method):
+    # the same run with SuperLU on the augmented matrix (the backend of large models): the stiff
+    # pin (2e14 N/m) beside O(1) constraint rows does not spoil the hinge
+    from dataclasses import replace
+
+    model, settings = nunchaku.build(method, 300)
+    result = run(model, replace(settings, solver="superlu"))
+    assert nunchaku.hinge_distance(result).max() <= 1e-9
