@@ -12,18 +12,19 @@ post-adjusted rotations (``dda1``) and SRDDA (``srdda``). SI units throughout.
 True
 """
 from .constraints import MotionHistory, hinge_forces
+from .contact import ContactSet
 from .geometry import PolygonError, block_moments
 from .integrators import METHODS, Method, TimeScheme, method_preset
-from .model import Load, Material, Model, ModelError
-from .simulation import DivergenceError, Result, RunSettings, State, run
+from .model import JointMaterial, Load, Material, Model, ModelError
+from .simulation import DivergenceError, Result, RunSettings, State, StepRejected, run
 from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "METHODS", "DivergenceError", "Load", "Material", "Method", "Model", "ModelError", "MotionHistory",
-    "PolygonError", "hinge_forces",
-    "Result", "RunSettings", "State", "TimeScheme", "available_solvers", "block_moments", "get_solver",
-    "method_preset", "run", "__version__", "ResultsStore", "StoredResult", "read_results", "resume",
+    "METHODS", "ContactSet", "DivergenceError", "JointMaterial", "Load", "Material", "Method", "Model", "ModelError",
+    "MotionHistory", "PolygonError", "hinge_forces",
+    "Result", "RunSettings", "State", "StepRejected", "TimeScheme", "available_solvers", "block_moments",
+    "get_solver", "method_preset", "run", "__version__", "ResultsStore", "StoredResult", "read_results", "resume",
 ]

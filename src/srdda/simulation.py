@@ -23,6 +23,7 @@ import numpy as np
 
 from .assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
 from .constraints import LEDGER, link_energy, step_terms, step_work
+from .contact.term import ContactModel, ContactParameters, ContactSet, ContactTerm
 from .geometry.polygon import BlockMoments
 from .integrators.methods import Method, method_preset
 from .integrators.schemes import SchemeCoefficients
@@ -31,12 +32,21 @@ from .kinematics.update import point_displacement, rotate_symmetric_components, 
 from .model import Model, ModelArrays
 from .solvers import LinearSolver, SolverError, get_solver
 
-__all__ = ["RunSettings", "State", "Result", "DivergenceError", "StepContext", "StepTerm", "Recorder",
+__all__ = ["RunSettings", "State", "Result", "DivergenceError", "StepRejected", "StepControl", "StepContext",
+           "StepTerm", "Recorder",
            "run", "initial_state", "advance", "energies"]
 
 
 class DivergenceError(RuntimeError):
     """The run produced non-finite values or an unbounded response."""
+
+
+class StepRejected(RuntimeError):
+    """A step must be repeated with Δt × ``factor`` (open-close not converged, too large a step)."""
+
+    def __init__(self, message: str, factor: float = 1.0 / 3.0) -> None:
+        super().__init__(message)
+        self.factor = factor
 
 
 @dataclass(frozen=True)
@@ -57,6 +67,18 @@ class RunSettings:
     secant_tolerance: float = 1e-13
     secant_max_iterations: int = 8
     record_every: int = 1
+    # contacts and step control (docs/contacts.md); lengths relative to w0 = half the model height
+    contacts: bool = True  # detect and resolve block contacts
+    contact_penalty: float | None = None  # normal contact stiffness k_n (N/m); None: ``penalty``
+    auto_penalty: float | None = None  # if set, k_n = auto_penalty × the largest Young's modulus × 1 m
+    shear_ratio: float = 0.4  # k_s / k_n
+    max_displacement_ratio: float = 0.01  # g2: largest vertex displacement of a step / w0
+    contact_distance_factor: float = 2.5  # d0 = factor × g2 × w0 (two vertices closing at g2·w0 each)
+    contact_angle_tolerance: float = 3.0  # degrees, Shi's angle criterion
+    penetration_fraction: float = 0.4  # a step that penetrates deeper than this × d0 is cut
+    open_close_max_iterations: int = 20  # state-changing solves of a step before it is cut and repeated
+    step_cut_factor: float = 1.0 / 3.0  # Δt ← factor·Δt when a step is cut
+    min_dt: float | None = None  # the run stops if Δt falls below this; None: 1e-6 × dt
 
     def __post_init__(self) -> None:
         if not self.dt > 0:
@@ -67,6 +89,19 @@ class RunSettings:
             raise ValueError("record_every must be >= 1")
         if not self.penalty > 0:
             raise ValueError("penalty must be > 0")
+        for name in ("contact_penalty", "auto_penalty", "min_dt"):
+            value = getattr(self, name)
+            if value is not None and not value > 0:
+                raise ValueError(f"{name} must be > 0, got {value}")
+        for name in ("shear_ratio", "max_displacement_ratio", "contact_distance_factor", "penetration_fraction"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        if not 0.0 <= self.contact_angle_tolerance < 45.0:
+            raise ValueError(f"contact_angle_tolerance must lie in [0, 45) degrees, got {self.contact_angle_tolerance}")
+        if self.open_close_max_iterations < 1:
+            raise ValueError("open_close_max_iterations must be >= 1")
+        if not 0.0 < self.step_cut_factor < 1.0:
+            raise ValueError(f"step_cut_factor must lie in (0, 1), got {self.step_cut_factor}")
         self.resolved_method()
 
     def resolved_method(self) -> Method:
@@ -88,6 +123,7 @@ class State:
     moments: BlockMoments  # block integrals of ``vertices``, computed once per state
     multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))  # μ of the last step (constraint rows)
     ledger: np.ndarray = field(default_factory=lambda: np.zeros(len(LEDGER)))  # cumulative work, see LEDGER
+    contacts: ContactSet | None = None  # contacts as the step that led here ended them
 
 
 class Recorder(Protocol):
@@ -116,6 +152,8 @@ class Result:
     energy: list[dict[str, float]] = field(default_factory=list)
     iterations: list[int] = field(default_factory=list)
     multipliers: list[np.ndarray] = field(default_factory=list)  # μ per step; force on point a = -μ (N/m)
+    closed_contacts: list[int] = field(default_factory=list)  # closed (sliding or locked) contacts
+    max_penetration: list[float] = field(default_factory=list)  # deepest closed contact (m)
     status: str = "running"
     final_state: State | None = None
 
@@ -146,6 +184,9 @@ class Result:
         self.energy.append(energies(arrays, state, penalty))
         self.iterations.append(solves)
         self.multipliers.append(state.multipliers.copy())
+        contacts = state.contacts
+        self.closed_contacts.append(0 if contacts is None else int(np.count_nonzero(contacts.closed)))
+        self.max_penetration.append(0.0 if contacts is None else contacts.max_penetration)
 
     def finish(self, status: str, state: State) -> None:
         self.status = status
@@ -232,11 +273,13 @@ def _point_terms(arrays: ModelArrays, state: State, lever: np.ndarray, theta: np
 
 def advance(arrays: ModelArrays, state: State, method: Method, dt: float, penalty: float,
             solver: LinearSolver, secant_tolerance: float = 1e-13, secant_max_iterations: int = 8,
-            terms: Sequence[StepTerm] = ()) -> tuple[State, int]:
+            terms: Sequence[StepTerm] = (), term_max_iterations: int = 20) -> tuple[State, int]:
     """One time step from ``state``; returns the new state and the number of solves.
 
     The model's hinges, pins, springs, driven points and base acceleration
     (:func:`srdda.constraints.step_terms`) come before ``terms``.
+    ``term_max_iterations`` caps the solves after which the contacts' open-close
+    still changes its assumptions: reaching it raises :class:`StepRejected`.
     """
     terms = [*step_terms(arrays), *terms]
     coeffs = method.scheme.coefficients(dt)
@@ -260,6 +303,7 @@ def advance(arrays: ModelArrays, state: State, method: Method, dt: float, penalt
     ctx = StepContext(arrays, state, method, coeffs, dt, state.time + coeffs.load_time_fraction * dt, penalty,
                       dt * V[:, 2] if secant else None)
     solves = 0
+    changes = 0  # solves after which a term (open-close) changed its assumptions
     while True:
         system = BlockSystem(diag.copy(), rhs.copy())
         if has_point_terms:
@@ -274,12 +318,19 @@ def advance(arrays: ModelArrays, state: State, method: Method, dt: float, penalt
         dd = solution[: system.size].reshape(-1, NDOF)
         multipliers = solution[system.size:]
         solves += 1
-        done = all([term.converged(dd, ctx) for term in terms])
+        flags = [term.converged(dd, ctx) for term in terms]
+        terms_done = all(flags)
+        contacts_pending = any(not ok for term, ok in zip(terms, flags) if isinstance(term, ContactTerm))
+        if contacts_pending:
+            changes += 1
+            if changes >= term_max_iterations:
+                raise StepRejected(f"step {state.step + 1}: open-close did not converge in {solves} solves")
+        done = terms_done
         if secant:
             mismatch = np.max(np.abs(dd[:, 2] - ctx.theta) * np.abs(dd[:, 2]))
             ctx.theta = dd[:, 2].copy()
             done = done and mismatch <= secant_tolerance
-        if done or solves >= secant_max_iterations:
+        if done or (not contacts_pending and solves >= secant_max_iterations + changes):
             break
 
     new_v = coeffs.v_d * dd + coeffs.v_v * V + coeffs.v_a * A
@@ -321,8 +372,10 @@ def energies(arrays: ModelArrays, state: State, penalty: float) -> dict[str, flo
         gap = state.points[arrays.spring_rows_a] - state.points[arrays.spring_rows_b]
         spring += 0.5 * float(np.sum(arrays.spring_stiffness * np.sum(gap**2, axis=1)))
     spring += link_energy(arrays, state, penalty)
-    total = kinetic + gravity + elastic + spring
-    out = {"kinetic": kinetic, "gravity": gravity, "elastic": elastic, "spring": spring, "total": total}
+    contact = state.contacts.energy if state.contacts is not None else 0.0
+    total = kinetic + gravity + elastic + spring + contact
+    out = {"kinetic": kinetic, "gravity": gravity, "elastic": elastic, "spring": spring, "contact": contact,
+           "total": total}
     out.update(zip(LEDGER, map(float, state.ledger)))
     out["balance"] = total - out["work_loads"] - out["work_prescribed"] - out["work_constraints"] + out["dissipated"]
     return out
@@ -354,12 +407,19 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     sinks: list[Recorder] = [result, *recorders]
     for sink in sinks:
         sink.record(arrays, state, settings.penalty, 0)
+    control = StepControl.of(arrays, settings)
     last_step = state.step + settings.n_steps
     status = "completed"
+    dt = settings.dt
     while state.step < last_step:
         try:
-            state, solves = advance(arrays, state, method, settings.dt, settings.penalty, solver,
-                                    settings.secant_tolerance, settings.secant_max_iterations)
+            state, solves, dt = control.step(arrays, state, method, dt, solver)
+        except StepRejected as exc:
+            dt *= exc.factor
+            if dt < control.min_dt:
+                status = f"stopped: {exc}; the time step {dt:.3g} s fell below the minimum {control.min_dt:.3g} s"
+                break
+            continue
         except DivergenceError as exc:
             status = f"diverged: {exc}"
             break
@@ -371,6 +431,74 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     for sink in sinks:
         sink.finish(status, state)
     return result
+
+
+def model_half_height(vertices: np.ndarray) -> float:
+    """w0: half the height of the model (half its width if it is flat), Shi's length scale."""
+    extent = np.ptp(vertices, axis=0)
+    return 0.5 * float(extent[1] if extent[1] > 0 else extent[0])
+
+
+def contact_parameters(arrays: ModelArrays, settings: RunSettings, w0: float) -> ContactParameters:
+    """Contact stiffnesses and distances of a run (docs/contacts.md)."""
+    kn = settings.contact_penalty if settings.contact_penalty is not None else settings.penalty
+    if settings.auto_penalty is not None:
+        young = 1.0 / arrays.compliance[:, 0, 0]  # E in plane stress, E/(1-ν²) in plane strain
+        kn = settings.auto_penalty * float(np.max(young)) * 1.0  # × unit thickness
+    d0 = settings.contact_distance_factor * settings.max_displacement_ratio * w0
+    return ContactParameters(kn, settings.shear_ratio * kn, d0, np.radians(settings.contact_angle_tolerance),
+                             settings.penetration_fraction * d0)
+
+
+@dataclass(frozen=True)
+class StepControl:
+    """One accepted step: contacts, the displacement-ratio check, Δt for the next step (Shi 1988).
+
+    Without contacts (one block, or ``contacts=False``) a step is never cut:
+    the displacement ratio g2 only bounds how far a vertex may travel between
+    two contact detections.
+    """
+
+    settings: RunSettings
+    max_displacement: float  # g2·w0
+    min_dt: float
+    contacts: ContactModel | None
+
+    @staticmethod
+    def of(arrays: ModelArrays, settings: RunSettings) -> StepControl:
+        w0 = model_half_height(arrays.vertices)
+        contacts = None
+        if settings.contacts and arrays.n_blocks > 1:
+            contacts = ContactModel(arrays, contact_parameters(arrays, settings, w0))
+        min_dt = settings.min_dt if settings.min_dt is not None else 1e-6 * settings.dt
+        return StepControl(settings, settings.max_displacement_ratio * w0, min_dt, contacts)
+
+    def step(self, arrays: ModelArrays, state: State, method: Method, dt: float,
+             solver: LinearSolver) -> tuple[State, int, float]:
+        """(new state, solves, Δt for the next step); :class:`StepRejected` if Δt must be cut."""
+        s = self.settings
+        term = None
+        if self.contacts is not None:
+            term = self.contacts.prepare(state.vertices, state.contacts, state.step == 0)
+        terms: list[StepTerm] = [term] if term is not None else []
+        try:
+            new, solves = advance(arrays, state, method, dt, s.penalty, solver, s.secant_tolerance,
+                                  s.secant_max_iterations, terms, s.open_close_max_iterations)
+        except StepRejected as exc:
+            raise StepRejected(str(exc), s.step_cut_factor) from exc
+        if self.contacts is None:  # g2 exists to keep contacts detectable (d0 = 2.5·g2·w0)
+            return new, solves, dt
+        moved = float(np.max(np.hypot(*(new.vertices - state.vertices).T)))
+        if moved > self.max_displacement:
+            raise StepRejected(f"step {new.step}: a vertex moved {moved:.3g} m > g2·w0 = {self.max_displacement:.3g} m",
+                               max(s.step_cut_factor, min(0.9, 0.9 * self.max_displacement / moved)))
+        if term is not None and term.max_penetration > term.params.max_penetration:
+            raise StepRejected(f"step {new.step}: penetration {term.max_penetration:.3g} m > "
+                               f"{term.params.max_penetration:.3g} m (raise the contact penalty)", s.step_cut_factor)
+        # grow Δt back towards the set value, at most ×1.5, aiming at 90% of g2·w0 for the next step
+        growth = 1.5 if moved == 0 else min(1.5, 0.9 * self.max_displacement / moved)
+        next_dt = min(s.dt, dt * growth)
+        return replace(new, contacts=term.commit() if term is not None else None), solves, next_dt
 
 
 def with_steps(settings: RunSettings, n_steps: int) -> RunSettings:

@@ -19,7 +19,7 @@ from ..constraints.history import HistoryError, MotionHistory
 from ..geometry.polygon import PolygonError
 from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..simulation import RunSettings
-from .schema import HistorySection, ModelFile
+from .schema import CONTACT_RUN_FIELDS, HistorySection, ModelFile
 
 __all__ = ["ModelFileError", "load_model", "model_from_dict", "save_model", "model_to_dict"]
 
@@ -122,7 +122,7 @@ def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
     r = spec.run
     settings = RunSettings(dt=r.dt, n_steps=r.steps, method=r.method, rho_inf=r.rho_inf, scheme=r.scheme,
                            linearization=r.linearization, penalty=r.penalty, solver=r.solver,
-                           record_every=r.record_every)
+                           record_every=r.record_every, **{k: getattr(r, k) for k in CONTACT_RUN_FIELDS})
     return model, settings
 
 
@@ -221,6 +221,8 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
     run: dict[str, Any] = {"method": settings.method, "dt": settings.dt, "steps": settings.n_steps,
                            "rho_inf": settings.rho_inf, "penalty": settings.penalty, "solver": settings.solver,
                            "record_every": settings.record_every}
+    defaults = RunSettings(dt=1.0, n_steps=0)
+    run.update({k: getattr(settings, k) for k in CONTACT_RUN_FIELDS if getattr(settings, k) != getattr(defaults, k)})
     if settings.scheme is not None:
         run["scheme"] = settings.scheme
     if settings.linearization is not None:

@@ -45,6 +45,23 @@ class RunSection(_Strict):
     penalty: Stiffness = Field(1e9, gt=0)
     solver: Literal["auto", "dense", "superlu", "cholmod", "pardiso"] = "auto"
     record_every: int = Field(1, ge=1)
+    # contacts and step control (docs/contacts.md); defaults as in RunSettings
+    contacts: bool = True
+    contact_penalty: Stiffness | None = Field(None, gt=0)
+    auto_penalty: float | None = Field(None, gt=0)
+    shear_ratio: float = Field(0.4, gt=0)
+    max_displacement_ratio: float = Field(0.01, gt=0)
+    contact_distance_factor: float = Field(2.5, gt=0)
+    contact_angle_tolerance: Angle = Field(3.0, ge=0, lt=45)
+    penetration_fraction: float = Field(0.4, gt=0)
+    open_close_max_iterations: int = Field(20, ge=1)
+    step_cut_factor: float = Field(1.0 / 3.0, gt=0, lt=1)
+    min_dt: Time | None = Field(None, gt=0)
+
+
+CONTACT_RUN_FIELDS = ("contacts", "contact_penalty", "auto_penalty", "shear_ratio", "max_displacement_ratio",
+                      "contact_distance_factor", "contact_angle_tolerance", "penetration_fraction",
+                      "open_close_max_iterations", "step_cut_factor", "min_dt")
 
 
 class MaterialSection(_Strict):

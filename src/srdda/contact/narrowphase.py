@@ -1,0 +1,200 @@
+"""Narrow phase: vertex-to-edge and vertex-to-vertex contacts of candidate block pairs.
+
+For every candidate pair (a, b), both ways round, each vertex v of a is tested
+against each edge of b (numba kernel, no Python loop). Blocks are stored
+counter-clockwise, so the outward normal of edge p0 -> p1 is (dy, -dx)/l and
+the signed distance n·(v - p0) is positive outside.
+
+* **Distance criterion** (Shi 1988): a vertex is a contact candidate when its
+  distance to an edge (or to a vertex) is below d0.
+* **Angle criterion** (Shi 1988): the vertex must be convex (interior angle at
+  most 180° + tolerance) and both of its edges must lie on the outer side of
+  the edge line (to within the angle tolerance), i.e. the vertex's wedge can
+  touch the edge without overlapping it first.
+* **Vertex-to-edge**: v projects into the interior of the edge.
+* **Vertex-to-vertex**: v is within d0 of a vertex q of b and in q's vertex
+  region (it projects beyond q on both edges at q). The *entrance line* is the
+  edge at q, among the two that
+  pass the angle criterion, with the largest signed distance to v: the line
+  v entered b through, or would enter through (the shortest way out of b).
+  Of the two ways to pair (v, q) -- v on an edge of q or q on an edge of v --
+  exactly one contact is kept: the one from the lower block index when both
+  pass the angle criterion, else the one that passes.
+
+* **Plausibility**: a vertex behind the edge's line (negative gap) counts
+  only if it lies inside the other block and no deeper than the allowed
+  penetration (a vertex on the far side of a thin block is not a contact).
+
+Output: contact vertex, contacted edge (index of its start vertex) and kind
+(0 vertex-edge, 1 vertex-vertex).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["detect_contacts", "previous_vertex_index", "VERTEX_EDGE", "VERTEX_VERTEX"]
+
+VERTEX_EDGE = 0
+VERTEX_VERTEX = 1
+
+
+def previous_vertex_index(block_ptr: np.ndarray) -> np.ndarray:
+    """Index of the previous vertex (cyclically within its block) for every vertex."""
+    n = int(block_ptr[-1])
+    prv = np.arange(-1, n - 1)
+    prv[block_ptr[:-1]] = block_ptr[1:] - 1
+    return prv
+
+
+@njit(cache=True)
+def _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol):
+    """Shi's angle criterion: convex vertex v whose two edges stay outside the line of normal n."""
+    ax = X[prv[v], 0] - X[v, 0]
+    ay = X[prv[v], 1] - X[v, 1]
+    bx = X[nxt[v], 0] - X[v, 0]
+    by = X[nxt[v], 1] - X[v, 1]
+    la = np.sqrt(ax * ax + ay * ay)
+    lb = np.sqrt(bx * bx + by * by)
+    # interior angle <= 180° (+tol): cross(v - prev, next - v) = cross(-a, b) >= -sin_tol·la·lb
+    if -(ax * by - ay * bx) < -sin_tol * la * lb:
+        return False
+    return nx * ax + ny * ay >= -sin_tol * la and nx * bx + ny * by >= -sin_tol * lb
+
+
+@njit(cache=True)
+def _edge_frame(X, nxt, e):
+    """Start point, direction and length of edge e; outward normal follows from CCW order."""
+    x0 = X[e, 0]
+    y0 = X[e, 1]
+    dx = X[nxt[e], 0] - x0
+    dy = X[nxt[e], 1] - y0
+    return x0, y0, dx, dy, np.sqrt(dx * dx + dy * dy)
+
+
+@njit(cache=True)
+def _projection(X, nxt, v, e):
+    x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
+    return ((X[v, 0] - x0) * dx + (X[v, 1] - y0) * dy) / (length * length)
+
+
+@njit(cache=True)
+def _entrance_edge(X, nxt, prv, v, q, sin_tol):
+    """The entrance line of vertex v at vertex q (edge start index), or -1.
+
+    -1 when v is not in q's vertex region (it projects into the interior of an
+    edge at q: a vertex-edge contact covers it) or neither edge passes the
+    angle criterion.
+    """
+    if _projection(X, nxt, v, q) > 0.0 or _projection(X, nxt, v, prv[q]) < 1.0:
+        return -1
+    best = -1
+    best_dist = -np.inf
+    for e in (prv[q], q):
+        x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
+        nx = dy / length
+        ny = -dx / length
+        if not _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol):
+            continue
+        dist = nx * (X[v, 0] - x0) + ny * (X[v, 1] - y0)
+        if dist > best_dist:
+            best_dist = dist
+            best = e
+    return best
+
+
+@njit(cache=True)
+def _inside(X, block_ptr, nxt, b, x, y):
+    """Crossing-number test: does (x, y) lie inside block b?"""
+    inside = False
+    for e in range(block_ptr[b], block_ptr[b + 1]):
+        x0 = X[e, 0]
+        y0 = X[e, 1]
+        x1 = X[nxt[e], 0]
+        y1 = X[nxt[e], 1]
+        if (y0 > y) != (y1 > y) and x < x0 + (y - y0) * (x1 - x0) / (y1 - y0):
+            inside = not inside
+    return inside
+
+
+@njit(cache=True)
+def _segment_distance(X, nxt, e, x, y):
+    x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
+    t = min(1.0, max(0.0, ((x - x0) * dx + (y - y0) * dy) / (length * length)))
+    return np.sqrt((x - x0 - t * dx) ** 2 + (y - y0 - t * dy) ** 2)
+
+
+@njit(cache=True)
+def _plausible(X, block_ptr, nxt, b, v, e, max_depth):
+    """A vertex behind the edge line is a contact only as a real, shallow penetration.
+
+    It must lie inside block b, no deeper than ``max_depth``, and the edge must
+    be the nearest part of b's boundary (its shortest way out); a vertex on
+    the far side of a thin block, or on b's boundary elsewhere, is not.
+    """
+    x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
+    x = X[v, 0]
+    y = X[v, 1]
+    depth = -(dy * (x - x0) - dx * (y - y0)) / length
+    if depth <= 0.0:
+        return True
+    if depth > max_depth or not _inside(X, block_ptr, nxt, b, x, y):
+        return False
+    slack = 1e-9 * length  # rounding of distances near a vertex shared by two edges
+    for f in range(block_ptr[b], block_ptr[b + 1]):
+        if f != e and _segment_distance(X, nxt, f, x, y) < depth - slack:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _push(buf, n, v, e, kind):
+    if n == len(buf):
+        bigger = np.empty((2 * len(buf), 3), dtype=np.int64)
+        bigger[:n] = buf[:n]
+        buf = bigger
+    buf[n, 0] = v
+    buf[n, 1] = e
+    buf[n, 2] = kind
+    return buf
+
+
+@njit(cache=True)
+def detect_contacts(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_tol, max_depth):
+    """Contacts (k, 3) [vertex, edge start, kind] of the candidate ``pairs`` (k, 2).
+
+    A vertex behind the edge's line counts only if it lies inside the other
+    block no deeper than ``max_depth`` (an accepted step never penetrates
+    deeper, so anything else is a vertex on the far side of a thin block).
+    """
+    buf = np.empty((max(16, 4 * len(pairs)), 3), dtype=np.int64)
+    n = 0
+    for k in range(len(pairs)):
+        for side in range(2):
+            a = pairs[k, side]
+            b = pairs[k, 1 - side]
+            for v in range(block_ptr[a], block_ptr[a + 1]):
+                x = X[v, 0]
+                y = X[v, 1]
+                if x < boxes[b, 0] - d0 or x > boxes[b, 2] + d0 or y < boxes[b, 1] - d0 or y > boxes[b, 3] + d0:
+                    continue
+                d02 = d0 * d0
+                for e in range(block_ptr[b], block_ptr[b + 1]):
+                    x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
+                    if (x - x0) ** 2 + (y - y0) ** 2 < d02:  # vertex-vertex with q = e
+                        chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
+                        if chosen >= 0 and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
+                                and _plausible(X, block_ptr, nxt, b, v, chosen, max_depth):
+                            buf = _push(buf, n, v, chosen, VERTEX_VERTEX)
+                            n += 1
+                    t = ((x - x0) * dx + (y - y0) * dy) / (length * length)
+                    if t <= 0.0 or t >= 1.0:
+                        continue
+                    nx = dy / length
+                    ny = -dx / length
+                    dist = nx * (x - x0) + ny * (y - y0)
+                    if abs(dist) < d0 and _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol) \
+                            and _plausible(X, block_ptr, nxt, b, v, e, max_depth):
+                        buf = _push(buf, n, v, e, VERTEX_EDGE)
+                        n += 1
+    return buf[:n].copy()

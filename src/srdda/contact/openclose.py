@@ -1,0 +1,65 @@
+"""The open-close rules: from a solved step, the state each contact should have had.
+
+States: OPEN (no spring), SLIDING (normal spring + Coulomb friction force
+opposing the slip), LOCKED (normal and shear springs). Shi (1988), ch. 4:
+
+* a contact is closed while its normal force N = -k_n·g_n stays above minus its
+  tensile strength (T·l, only while the contact is bonded), else OPEN;
+* a closed contact is LOCKED while the shear spring force |k_s·s| is at most
+  the Mohr-Coulomb strength N·tan φ + c·l (c·l only while bonded), else
+  SLIDING in the direction of s;
+* a contact that closes is LOCKED first: its normal force, which sets the
+  friction of a sliding contact, is known only after a solve with it closed;
+* a SLIDING contact locks when its slip reverses (friction can stop a block,
+  never push it back) or when its slip force drops below the strength.
+
+Two additions make impacts converge (docs/contacts.md):
+
+* a contact that closed during this step's iterations (it was OPEN and the
+  solve drove it into the edge) and then, LOCKED, pulls in tension, SLIDES
+  instead of re-opening: the tension comes from the shear spring stopping a
+  glancing vertex dead, the open <-> locked cycle never ends, and a vertex
+  that penetrates when free must be pushed, not pulled;
+* the friction of a sliding contact uses the normal force of the previous
+  solve (Shi); the step is iterated until that force has settled to
+  ``friction_tolerance`` (relative) as well (for at most a few solves in
+  large systems, see :mod:`srdda.contact.term`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["OPEN", "SLIDING", "LOCKED", "next_states"]
+
+OPEN, SLIDING, LOCKED = 0, 1, 2
+
+
+def next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.ndarray, kn: float, ks: float,
+                tan_phi: np.ndarray, cohesion_force: np.ndarray, tension_force: np.ndarray,
+                closed_this_step: np.ndarray, friction_normal: np.ndarray, friction_tolerance: float = 1e-3
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """New (state, slip sign, changed, unsettled) of every contact for end-of-step gap and shear.
+
+    ``unsettled``: sliding contacts whose friction used a normal force more
+    than ``friction_tolerance`` (relative) away from the solved one.
+
+    ``closed_this_step`` marks contacts that were OPEN in an earlier solve of
+    this step; ``friction_normal`` is the normal force the last solve used for
+    the friction of sliding contacts.
+    """
+    normal = -kn * gap
+    closed = normal >= -tension_force
+    strength = np.maximum(normal, 0.0) * tan_phi + cohesion_force
+    slip = np.sign(shear).astype(np.int8)
+    holds = ks * np.abs(shear) <= strength
+    reversed_slip = (state == SLIDING) & (slip != sign) & (strength > 0)
+    just_closed = state == OPEN
+    glancing = (state == LOCKED) & ~closed & closed_this_step
+    new_state = np.where(closed, np.where(holds | reversed_slip | just_closed, LOCKED, SLIDING), OPEN)
+    new_state = np.where(glancing, SLIDING, new_state).astype(np.int8)
+    new_sign = np.where(new_state == SLIDING, slip, 0).astype(np.int8)
+    friction = tan_phi > 0
+    changed = (new_state != state) | ((new_state == SLIDING) & (new_sign != sign) & friction)
+    unsettled = (new_state == SLIDING) & (state == SLIDING) & friction & (
+        np.abs(np.maximum(normal, 0.0) - friction_normal) > friction_tolerance * np.maximum(normal, 0.0))
+    return new_state, new_sign, changed, unsettled

@@ -1,0 +1,262 @@
+"""Contacts as a :class:`srdda.simulation.StepTerm`, and their state between steps.
+
+Per step: :meth:`ContactModel.prepare` detects contacts in the configuration at
+t (broad + narrow phase), carries over what persisting contacts knew
+(:class:`ContactSet` on ``State.contacts``) and returns a :class:`ContactTerm`
+for :func:`srdda.simulation.advance`. The term adds the springs and friction
+forces of the assumed states; after each solve it runs the open-close rules and
+asks for another solve while a state changes. :meth:`ContactTerm.commit` gives
+the :class:`ContactSet` to store on the accepted state.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
+from ..model import ModelArrays
+from .broadphase import block_boxes, candidate_pairs
+from .narrowphase import detect_contacts, previous_vertex_index
+from .openclose import LOCKED, OPEN, SLIDING, next_states
+from .springs import ContactGeometry, bond_length, contact_geometry
+from .transfer import contact_keys, match_previous
+
+__all__ = ["ContactParameters", "ContactSet", "ContactTerm", "ContactModel", "FREEZE_AFTER", "SETTLE_AFTER"]
+
+FREEZE_AFTER = 2  # state changes of one contact within a step after which its state is kept
+SETTLE_AFTER = 8  # solves after which no contact may reopen or relock and friction is not re-iterated
+
+
+@dataclass(frozen=True)
+class ContactParameters:
+    """Resolved contact settings of a run (SI)."""
+
+    normal_stiffness: float  # k_n (N/m)
+    shear_stiffness: float  # k_s (N/m)
+    distance: float  # d0 (m): contact search distance
+    angle_tolerance: float  # rad, Shi's angle criterion
+    max_penetration: float  # m: a step that penetrates deeper is cut
+
+
+@dataclass(frozen=True)
+class ContactSet:
+    """Contacts at the end of an accepted step (stored on ``State.contacts``)."""
+
+    vertex: np.ndarray  # (n,) contact vertex
+    edge: np.ndarray  # (n,) contacted edge (its start vertex)
+    kind: np.ndarray  # (n,) 0 vertex-edge, 1 vertex-vertex
+    state: np.ndarray  # (n,) OPEN / SLIDING / LOCKED
+    sign: np.ndarray  # (n,) slip direction along the edge of sliding contacts
+    reference: np.ndarray  # (n,) edge parameter of the shear reference point
+    bonded: np.ndarray  # (n,) cohesion and tensile strength still act
+    normal_force: np.ndarray  # (n,) N (compression positive)
+    gap: np.ndarray  # (n,) end-of-step normal gap (negative: penetration)
+    shear: np.ndarray  # (n,) end-of-step shear spring displacement
+    energy: float  # J per m: ½k_n g_n² (closed) + ½k_s s² (locked)
+
+    @staticmethod
+    def empty() -> ContactSet:
+        i = np.empty(0, dtype=np.int64)
+        f = np.empty(0)
+        return ContactSet(i, i, i, i.astype(np.int8), i.astype(np.int8), f, i.astype(bool), f, f, f, 0.0)
+
+    @property
+    def closed(self) -> np.ndarray:
+        return self.state != OPEN
+
+    @property
+    def max_penetration(self) -> float:
+        pen = -self.gap[self.closed]
+        return float(max(pen.max(), 0.0)) if len(pen) else 0.0
+
+
+class ContactTerm:
+    """The contacts of one step: springs, friction and the open-close iteration."""
+
+    def __init__(self, geometry: ContactGeometry, found: np.ndarray, params: ContactParameters, state: np.ndarray,
+                 sign: np.ndarray, reference: np.ndarray, bonded: np.ndarray, normal_force: np.ndarray,
+                 joint: np.ndarray, length: np.ndarray) -> None:
+        self.geometry = geometry
+        self.found = found
+        self.params = params
+        self.state = state
+        self.sign = sign
+        self.reference = reference
+        self.bonded = bonded
+        self.normal_force = normal_force
+        self.tan_phi = np.tan(joint[:, 0])
+        self.cohesion_force = np.where(bonded, joint[:, 1] * length, 0.0)
+        self.tension_force = np.where(bonded, joint[:, 2] * length, 0.0)
+        self.shear0 = geometry.shear(reference)
+        self.gap = geometry.gap.copy()
+        self.shear = self.shear0.copy()
+        self.iterations = 0
+        self.closed_this_step = np.zeros(len(state), dtype=bool)
+        self.flips = np.zeros(len(state), dtype=np.int64)  # state changes of each contact in this step
+        self.friction_normal = normal_force.copy()  # N used for the friction of sliding contacts
+        self._secant: tuple[np.ndarray, np.ndarray] | None = None  # previous (N used, residual)
+        self._shapes: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def __len__(self) -> int:
+        return len(self.state)
+
+    # -- StepTerm -----------------------------------------------------------
+    def add_to(self, system: BlockSystem, ctx) -> None:
+        g = self.geometry
+        a, b = g.vertex_block, g.edge_block
+        tv = ctx.shape_at(a, g.point)
+        tq = ctx.shape_at(b, g.foot)
+        tr = ctx.shape_at(b, g.point_on_edge(self.reference))
+        self._shapes = (tv, tq, tr)
+        closed = self.state != OPEN
+        if np.any(closed):
+            locked = (self.state[closed] == LOCKED).astype(float)
+            rn = np.sqrt(self.params.normal_stiffness)
+            rs = np.sqrt(self.params.shear_stiffness) * locked
+            n, t = g.normal[closed], g.tangent[closed]
+            t_a = np.stack([rn * np.einsum("nk,nki->ni", n, tv[closed]),
+                            rs[:, None] * np.einsum("nk,nki->ni", t, tv[closed])], axis=1)
+            t_b = np.stack([rn * np.einsum("nk,nki->ni", n, tq[closed]),
+                            rs[:, None] * np.einsum("nk,nki->ni", t, tr[closed])], axis=1)
+            gap = np.column_stack([rn * g.gap[closed], rs * self.shear0[closed]])
+            add_penalty_pairs(system, PenaltyPairs(a[closed], t_a, b[closed], t_b, gap, np.ones(int(closed.sum()))),
+                              ctx.coeffs.c_p)
+        sliding = self.state == SLIDING
+        if np.any(sliding):
+            # Coulomb friction opposing the slip of v along the edge, N of the last solve (Shi 1988)
+            magnitude = -self.sign[sliding] * self.tan_phi[sliding] * self.friction_normal[sliding]
+            force = magnitude[:, None] * g.tangent[sliding]
+            np.add.at(system.rhs, a[sliding], np.einsum("nki,nk->ni", tv[sliding], force))
+            np.add.at(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tq[sliding], force))
+
+    def converged(self, dd: np.ndarray, ctx) -> bool:
+        assert self._shapes is not None
+        g = self.geometry
+        tv, tq, tr = self._shapes
+        ua = np.einsum("nki,ni->nk", tv, dd[g.vertex_block])
+        self.gap = g.gap + np.einsum("nk,nk->n", g.normal, ua - np.einsum("nki,ni->nk", tq, dd[g.edge_block]))
+        self.shear = self.shear0 + np.einsum("nk,nk->n", g.tangent,
+                                             ua - np.einsum("nki,ni->nk", tr, dd[g.edge_block]))
+        p = self.params
+        self.closed_this_step |= (self.state == OPEN) & (self.gap < 0)
+        state, sign, changed, unsettled = next_states(self.state, self.sign, self.gap, self.shear, p.normal_stiffness,
+                                           p.shear_stiffness, self.tan_phi, self.cohesion_force, self.tension_force,
+                                           self.closed_this_step, self.friction_normal)
+        # a contact that has already changed state FREEZE_AFTER times in this step keeps its state,
+        # so that the iteration ends (it may carry a little tension for one step; the next step
+        # starts from the actual gap). Closing a clearly penetrating contact, opening a clearly
+        # open one and letting a locked one slip are never held back: they keep forces bounded
+        # and store no spurious energy.
+        # (never frozen LOCKED against a slip: a locked spring past its strength would keep
+        # loading from step to step)
+        # After SETTLE_AFTER solves every contact is held so, to settle cascades in large systems.
+        band = 1e-6 * p.distance  # clearly open or penetrating, not by rounding at a zero gap
+        safe = (((self.state == LOCKED) & (state == SLIDING)) | ((self.state == OPEN) & (self.gap < -band))
+                | ((self.state != OPEN) & (state == OPEN) & (self.gap > band)))
+        limit = 0 if self.iterations >= SETTLE_AFTER else FREEZE_AFTER
+        frozen = (self.flips >= limit) & (state != self.state) & ~safe
+        state = np.where(frozen, self.state, state).astype(np.int8)
+        sign = np.where(frozen, self.sign, sign).astype(np.int8)
+        changed = np.where(frozen, False, changed)
+        if self.iterations < SETTLE_AFTER:  # then friction forces are taken as they are
+            changed = changed | unsettled
+        self.flips += state != self.state
+        self.normal_force = np.maximum(-p.normal_stiffness * self.gap, 0.0)
+        self.friction_normal = self._next_friction_normal(state)
+        self.state, self.sign = state, sign
+        self.iterations += 1
+        return not bool(np.any(changed))
+
+    def _next_friction_normal(self, new_state: np.ndarray) -> np.ndarray:
+        """N for the next solve's friction: a per-contact secant step on N_used -> N_solved.
+
+        Plain substitution (Shi) converges slowly when friction feeds back on
+        the normal force (a glancing impact: factor about -1/3 per solve); the
+        secant step on the scalar residual N_solved - N_used settles it in two
+        or three solves. Contacts that were not sliding take N_solved.
+        """
+        used, solved = self.friction_normal, self.normal_force
+        residual = solved - used
+        nxt = solved.copy()
+        sliding = (self.state == SLIDING) & (new_state == SLIDING)
+        if self._secant is not None:
+            prev_used, prev_residual = self._secant
+            slope = residual - prev_residual
+            ok = sliding & (np.abs(slope) > 1e-12 * np.maximum(np.abs(residual), 1e-300)) & (used != prev_used)
+            step = np.where(ok, residual * (used - prev_used) / np.where(ok, slope, 1.0), 0.0)
+            nxt = np.where(ok, np.maximum(used - step, 0.0), nxt)
+        self._secant = (used.copy(), residual)
+        return nxt
+
+    # -- after the step ---------------------------------------------------
+    def commit(self) -> ContactSet:
+        """The contacts as they ended the accepted step."""
+        p = self.params
+        closed = self.state != OPEN
+        locked = self.state == LOCKED
+        energy = 0.5 * p.normal_stiffness * float(np.sum(self.gap[closed] ** 2)) \
+            + 0.5 * p.shear_stiffness * float(np.sum(self.shear[locked] ** 2))
+        return ContactSet(self.found[:, 0], self.found[:, 1], self.found[:, 2], self.state.copy(), self.sign.copy(),
+                          self.reference.copy(), self.bonded & locked, self.normal_force.copy(), self.gap.copy(),
+                          np.where(locked, self.shear, 0.0), energy)
+
+    @property
+    def max_penetration(self) -> float:
+        pen = -self.gap[self.state != OPEN]
+        return float(max(pen.max(), 0.0)) if len(pen) else 0.0
+
+
+class ContactModel:
+    """Detects the contacts of a configuration and builds each step's :class:`ContactTerm`."""
+
+    def __init__(self, arrays: ModelArrays, params: ContactParameters) -> None:
+        self.arrays = arrays
+        self.params = params
+        self.previous_vertex = previous_vertex_index(arrays.block_ptr)
+        self.movable = ~arrays.block_fixed
+        self.sin_tol = float(np.sin(params.angle_tolerance))
+        self.cos_parallel = float(np.cos(params.angle_tolerance))
+
+    def detect(self, vertices: np.ndarray) -> np.ndarray:
+        """Contacts (k, 3) [vertex, edge start, kind] of a configuration."""
+        arr = self.arrays
+        boxes = block_boxes(vertices, arr.block_ptr)
+        pairs = candidate_pairs(boxes, self.params.distance, self.movable)
+        if len(pairs) == 0:
+            return np.empty((0, 3), dtype=np.int64)
+        return detect_contacts(vertices, arr.block_ptr, arr.vertex_block, arr.next_vertex, self.previous_vertex,
+                               pairs, boxes, self.params.distance, self.sin_tol, self.params.max_penetration)
+
+    def prepare(self, vertices: np.ndarray, previous: ContactSet | None, first_step: bool) -> ContactTerm | None:
+        """The term of the step starting at ``vertices``; None when no contact is near."""
+        found = self.detect(vertices)
+        if len(found) == 0:
+            return None
+        arr = self.arrays
+        geom = contact_geometry(vertices, arr.vertex_block, arr.next_vertex, found[:, 0], found[:, 1])
+        previous = previous if previous is not None else ContactSet.empty()
+        nv = len(vertices)
+        old = match_previous(contact_keys(found[:, 0], found[:, 1], nv), contact_keys(previous.vertex, previous.edge, nv))
+        kept = old >= 0
+        src = old[kept]
+        state = np.where(geom.gap <= 0.0, LOCKED, OPEN).astype(np.int8)
+        state[kept] = previous.state[src]
+        sign = np.zeros(len(found), dtype=np.int8)
+        sign[kept] = previous.sign[src]
+        reference = geom.projection.copy()
+        keep_reference = kept.copy()
+        keep_reference[kept] = previous.state[src] == LOCKED
+        reference[keep_reference] = previous.reference[old[keep_reference]]
+        # contacts present at the start are bonded joints; ones formed later never are
+        bonded = np.full(len(found), first_step)
+        bonded[kept] = previous.bonded[src]
+        normal_force = self.params.normal_stiffness * np.maximum(-geom.gap, 0.0)
+        normal_force[kept] = previous.normal_force[src]
+        joint_index = arr.edge_joint[found[:, 1]]
+        by_materials = arr.joint_by_materials[arr.block_material[geom.vertex_block],
+                                              arr.block_material[geom.edge_block]]
+        joint = arr.joint_properties[np.where(joint_index >= 0, joint_index, by_materials)]
+        length = bond_length(vertices, arr.next_vertex, self.previous_vertex, found[:, 0], geom.tangent,
+                             self.cos_parallel)
+        return ContactTerm(geom, found, self.params, state, sign, reference, bonded, normal_force, joint, length)

@@ -1,0 +1,147 @@
+"""Contact detection: vertex-edge and vertex-vertex contacts of convex and concave blocks,
+the entrance line, the broad phase against all pairs, and contact transfer."""
+import numpy as np
+import pytest
+
+import srdda
+from srdda.contact import VERTEX_EDGE, VERTEX_VERTEX, ContactModel, ContactParameters, candidate_pairs
+from srdda.contact.broadphase import block_boxes
+from srdda.contact.transfer import match_previous
+
+D0 = 0.05
+
+
+def _model(*blocks):
+    m = srdda.Model()
+    m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
+    for b in blocks:
+        m.add_block(b, "rock")
+    return m.arrays()
+
+
+def _detect(arrays, d0=D0):
+    cm = ContactModel(arrays, ContactParameters(1e9, 4e8, d0, np.radians(3.0), 0.4 * d0))
+    found = cm.detect(arrays.vertices)
+    return {(tuple(arrays.vertices[v]), tuple(arrays.vertices[e]), int(k)) for v, e, k in found}
+
+
+def test_vertex_on_edge_of_convex_block():
+    # A triangle's apex 0.01 m above the middle of a square's top edge: one vertex-edge contact.
+    arr = _model([[0, 0], [1, 0], [1, 1], [0, 1]], [[0.5, 1.01], [0.8, 1.5], [0.2, 1.5]])
+    found = _detect(arr)
+    # The top edge of the square runs (1, 1) -> (0, 1) counter-clockwise.
+    assert found == {((0.5, 1.01), (1.0, 1.0), VERTEX_EDGE)}
+
+
+def test_far_vertex_is_not_a_contact():
+    arr = _model([[0, 0], [1, 0], [1, 1], [0, 1]], [[0.5, 1.0 + 2 * D0], [0.8, 1.5], [0.2, 1.5]])
+    assert _detect(arr) == set()
+
+
+def test_angle_criterion_rejects_a_vertex_whose_wedge_overlaps_the_edge():
+    # The triangle's vertex (0.5, 1.01) has an edge going down below the square's top line:
+    # its wedge cannot touch the top edge without overlapping it first.
+    arr = _model([[0, 0], [1, 0], [1, 1], [0, 1]], [[0.5, 1.01], [0.9, 0.8 + 1.0], [0.9, 0.6]])
+    found = _detect(arr)
+    assert not any(f[0] == (0.5, 1.01) for f in found)
+
+
+def test_face_to_face_contact_gives_one_contact_per_corner():
+    # A square resting on a wider base: its two bottom corners on the base's top edge.
+    arr = _model([[-2, -1], [2, -1], [2, 0], [-2, 0]], [[0, 0], [1, 0], [1, 1], [0, 1]])
+    found = _detect(arr)
+    assert found == {((0.0, 0.0), (2.0, 0.0), VERTEX_EDGE), ((1.0, 0.0), (2.0, 0.0), VERTEX_EDGE)}
+
+
+def test_stacked_equal_squares_vertex_vertex_once_with_the_right_entrance_line():
+    # Corners coincide pairwise: each pair is one vertex-vertex contact (not two) whose edge
+    # is the shared horizontal line, never a vertical side.
+    arr = _model([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1], [1, 1], [1, 2], [0, 2]])
+    found = _detect(arr)
+    assert len(found) == 2
+    for vertex, edge_start, kind in found:
+        assert kind == VERTEX_VERTEX
+        v = np.array(vertex)
+        e = arr.vertices[np.flatnonzero((arr.vertices == edge_start).all(axis=1))]
+        assert v[1] == 1.0 and all(p[1] == 1.0 for p in e)
+    # Each contacted edge is horizontal (both ends at y = 1).
+    for _, edge_start, _ in found:
+        assert edge_start[1] == 1.0
+
+
+def test_corner_to_corner_entrance_line_is_the_edge_it_crosses():
+    # A diamond's bottom vertex penetrates the top-right corner region of a square, 0.002 m
+    # below its top and 0.01 m inside its right side: the shortest way out is the top edge.
+    # It projects into both edges at the corner; the right side fails the angle criterion.
+    arr = _model([[0.99, 0.998], [1.5, 1.5], [0.99, 2.0], [0.48, 1.5]], [[0, 0], [1, 0], [1, 1], [0, 1]])
+    found = _detect(arr)
+    assert found == {((0.99, 0.998), (1.0, 1.0), VERTEX_EDGE)}
+
+
+def test_vertex_vertex_corner_region():
+    # The diamond's bottom vertex just outside the square's top-right corner, beyond both edges:
+    # a vertex-vertex contact whose entrance line is the square's top edge (the vertex is farther
+    # outside it). The square's corner, 0.0035 m from the diamond's lower-left edge, projects into
+    # that edge: a vertex-edge contact.
+    arr = _model([[0, 0], [1, 0], [1, 1], [0, 1]], [[1.01, 1.005], [1.5, 1.5], [1.01, 2.0], [0.52, 1.5]])
+    found = _detect(arr)
+    assert found == {((1.01, 1.005), (1.0, 1.0), VERTEX_VERTEX), ((1.0, 1.0), (0.52, 1.5), VERTEX_EDGE)}
+
+
+def test_vertex_vertex_entrance_line_of_the_other_way_round():
+    # Same with the diamond as block 0: the same two contacts (block order does not matter when
+    # only one way round is in the other vertex's region).
+    arr = _model([[1.01, 1.005], [1.5, 1.5], [1.01, 2.0], [0.52, 1.5]], [[0, 0], [1, 0], [1, 1], [0, 1]])
+    found = _detect(arr)
+    assert found == {((1.01, 1.005), (1.0, 1.0), VERTEX_VERTEX), ((1.0, 1.0), (0.52, 1.5), VERTEX_EDGE)}
+
+
+def test_concave_block_notch_gives_two_contacts():
+    # An L-shaped (concave) block; a square's corner sits in its inner corner, touching both legs.
+    ell = [[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]]
+    square = [[1.01, 1.01], [1.8, 1.01], [1.8, 1.8], [1.01, 1.8]]
+    arr = _model(ell, square)
+    found = _detect(arr)
+    at_corner = {f for f in found if f[0] == (1.01, 1.01)}
+    # the square's corner is 0.01 from the leg top (2,1)->(1,1) and from the side (1,1)->(1,2)
+    # and projects into both: one vertex-edge contact on each leg
+    assert at_corner == {((1.01, 1.01), (2.0, 1.0), VERTEX_EDGE), ((1.01, 1.01), (1.0, 1.0), VERTEX_EDGE)}
+    # the square's bottom edge lies on the leg top: its other bottom corner touches it too
+    assert ((1.8, 1.01), (2.0, 1.0), VERTEX_EDGE) in found
+    # the ell's reflex vertex (1, 1) is never a contact vertex
+    assert not any(f[0] == (1.0, 1.0) for f in found)
+
+
+def test_concave_block_vertex_on_inner_edges():
+    # A triangle poking into the notch of a U-shaped block touches both inner walls.
+    u = [[0, 0], [3, 0], [3, 2], [2, 2], [2, 1], [1, 1], [1, 2], [0, 2]]
+    wedge = [[1.5, 1.3], [1.99, 1.6], [1.99, 2.5], [1.01, 2.5], [1.01, 1.6]]
+    arr = _model(u, wedge)
+    found = _detect(arr)
+    vertices = {f[0] for f in found}
+    assert (1.99, 1.6) in vertices and (1.01, 1.6) in vertices  # on the two inner walls
+    assert (1.5, 1.3) not in vertices  # 0.3 m above the notch floor
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_broad_phase_finds_every_pair_that_all_pairs_finds(seed):
+    rng = np.random.default_rng(seed)
+    lo = rng.uniform(0, 10, (300, 2))
+    boxes = np.hstack([lo, lo + rng.uniform(0.05, 0.5, (300, 2))])
+    margin = 0.1
+    got = {tuple(p) for p in candidate_pairs(boxes, margin)}
+    g = boxes + np.array([-1, -1, 1, 1]) * margin / 2
+    overlap = ((g[:, None, 0] <= g[None, :, 2]) & (g[None, :, 0] <= g[:, None, 2])
+               & (g[:, None, 1] <= g[None, :, 3]) & (g[None, :, 1] <= g[:, None, 3]))
+    i, j = np.nonzero(np.triu(overlap, 1))
+    assert got == set(zip(i.tolist(), j.tolist()))
+
+
+def test_block_boxes():
+    arr = _model([[0, 0], [1, 0], [1, 1], [0, 1]], [[2, 3], [4, 3], [3, 5]])
+    assert np.array_equal(block_boxes(arr.vertices, arr.block_ptr), [[0, 0, 1, 1], [2, 3, 4, 5]])
+
+
+def test_match_previous():
+    assert match_previous(np.array([5, 7, 9]), np.array([9, 1, 5])).tolist() == [2, -1, 0]
+    assert match_previous(np.array([5]), np.array([], dtype=np.int64)).tolist() == [-1]

@@ -1,0 +1,77 @@
+"""Step control: cut steps keep velocities exact; a run never loops forever."""
+import numpy as np
+import pytest
+
+import srdda
+from srdda.contact import ContactSet
+
+G = 10.0
+
+
+def _falling_block_over_far_ground(gap=100.0):
+    m = srdda.Model(gravity=(0.0, -G))
+    m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
+    m.add_block([[-1, -gap - 1], [2, -gap - 1], [2, -gap], [-1, -gap]], "rock", fixed=True)
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+    return m
+
+
+@pytest.mark.parametrize("method, rho", [("dda0", 1.0), ("dda1", 1.0), ("srdda", 1.0), ("srdda", 0.5)])
+def test_free_fall_with_cut_steps_keeps_v_equal_g_t(method, rho):
+    # w0 = 51 m (the model is 102 m high), g2 = 2e-6: a step may move 1e-4 m, so the 10 ms steps get cut again and again.
+    # Every scheme integrates constant acceleration exactly, whatever the step sizes: v = g t and
+    # y = -g t²/2 to rounding (1e-12 relative).
+    settings = srdda.RunSettings(dt=0.01, n_steps=60, method=method, rho_inf=rho, max_displacement_ratio=2e-6)
+    res = srdda.run(_falling_block_over_far_ground(), settings)
+    assert res.completed, res.status
+    t = np.asarray(res.time)
+    dts = np.diff(t)
+    assert dts.min() < 0.5 * settings.dt  # steps were cut
+    assert len(np.unique(np.round(dts, 15))) > 3  # and Δt varied
+    v = res.array("velocity")[:, 1, 1]
+    assert np.allclose(v, -G * t, rtol=1e-12, atol=1e-12)
+    y = res.array("centroid")[:, 1, 1] - 0.5
+    assert np.allclose(y, -0.5 * G * t**2, rtol=1e-10, atol=1e-12)
+
+
+def test_step_displacement_never_exceeds_g2_w0():
+    settings = srdda.RunSettings(dt=0.01, n_steps=40, max_displacement_ratio=2e-6)
+    res = srdda.run(_falling_block_over_far_ground(), settings)
+    moved = np.abs(np.diff(res.array("centroid")[:, 1, 1]))
+    assert moved.max() <= 2e-6 * 51.0 * (1 + 1e-12)  # g2·w0, w0 = half of the 102 m model height
+
+
+def test_open_close_cap_cuts_and_then_stops_with_a_message():
+    # The block rests on a frictionless base and moves sideways: its contacts start locked and
+    # must turn to sliding, which needs a second solve at any Δt. With a cap of one solve the
+    # step is cut until Δt falls below the minimum, and the run stops (never loops forever).
+    m = srdda.Model(gravity=(0.0, -G))
+    m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
+    m.add_block([[-2, -1], [2, -1], [2, 0], [-2, 0]], "rock", fixed=True)
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock", velocity=(1.0, 0.0))
+    settings = srdda.RunSettings(dt=1e-3, n_steps=10, open_close_max_iterations=1, min_dt=1e-7)
+    res = srdda.run(m, settings)
+    assert res.status.startswith("stopped")
+    assert "open-close did not converge" in res.status and "minimum" in res.status
+    assert res.final_state.step == 0  # nothing accepted, nothing recorded but the start
+    ok = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=10))
+    assert ok.completed
+
+
+def test_contacts_are_committed_on_the_state():
+    m = srdda.Model(gravity=(0.0, -G))
+    m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
+    m.add_block([[-2, -1], [2, -1], [2, 0], [-2, 0]], "rock", fixed=True)
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+    res = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=3))
+    contacts = res.final_state.contacts
+    assert isinstance(contacts, ContactSet) and len(contacts.vertex) == 2
+    assert np.all(contacts.closed) and contacts.energy > 0
+
+
+@pytest.mark.parametrize("field, value", [("max_displacement_ratio", 0.0), ("step_cut_factor", 1.0),
+                                          ("open_close_max_iterations", 0), ("contact_penalty", -1.0),
+                                          ("contact_angle_tolerance", 60.0)])
+def test_bad_settings_are_refused_by_name(field, value):
+    with pytest.raises(ValueError, match=field):
+        srdda.RunSettings(dt=1e-3, n_steps=1, **{field: value})
