@@ -51,7 +51,7 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state",
 
 FORMAT = "srdda-results"
 FORMAT_VERSION = 1
-ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "total", *LEDGER, "balance")
+ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "contact", "total", *LEDGER, "balance")
 
 ContactProvider = Callable[[ModelArrays, State], Mapping[str, np.ndarray] | None]
 """Hook for contact output: per-contact arrays (first axis = contact) of one state, or None.
