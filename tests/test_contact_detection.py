@@ -145,3 +145,21 @@ def test_block_boxes():
 def test_match_previous():
     assert match_previous(np.array([5, 7, 9]), np.array([9, 1, 5])).tolist() == [2, -1, 0]
     assert match_previous(np.array([5]), np.array([], dtype=np.int64)).tolist() == [-1]
+
+
+def test_vertex_on_the_far_side_of_a_thin_block_is_not_a_contact():
+    # A triangle's apex touches the top of a 0.1 m thin plate. With d0 = 0.3 m the apex is also
+    # within d0 of the plate's bottom edge (0.1 behind its line): not a contact (the angle
+    # criterion and the plausibility test both reject it); only the top-edge contact is real.
+    arr = _model([[0, 0], [2, 0], [2, 0.1], [0, 0.1]], [[1.0, 0.1], [1.3, 0.6], [0.7, 0.6]])
+    found = _detect(arr, d0=0.3)
+    assert {f for f in found if f[0] == (1.0, 0.1)} == {((1.0, 0.1), (2.0, 0.1), VERTEX_EDGE)}
+
+
+def test_shallow_penetration_is_a_contact_deep_is_not():
+    # A penetrating vertex counts while inside the other block and no deeper than the allowed
+    # penetration (0.4 d0 = 0.02 m here); deeper, it can only be a mis-pairing.
+    shallow = _model([[0, 0], [2, 0], [2, 1], [0, 1]], [[1.0, 0.99], [1.3, 1.5], [0.7, 1.5]])
+    assert ((1.0, 0.99), (2.0, 1.0), VERTEX_EDGE) in _detect(shallow)
+    deep = _model([[0, 0], [2, 0], [2, 1], [0, 1]], [[1.0, 0.97], [1.3, 1.5], [0.7, 1.5]])
+    assert not any(f[0] == (1.0, 0.97) for f in _detect(deep))

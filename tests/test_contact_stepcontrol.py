@@ -41,6 +41,9 @@ def test_step_displacement_never_exceeds_g2_w0():
     assert moved.max() <= 2e-6 * 51.0 * (1 + 1e-12)  # g2·w0, w0 = half of the 102 m model height
 
 
+# Δt is cut down to 1e-7 s here: 2M/Δt² dwarfs the fixed block's identity rows, and scipy's
+# dense solver warns about the condition number (the solutions are still used only to be rejected).
+@pytest.mark.filterwarnings("ignore::scipy.linalg.LinAlgWarning")
 def test_open_close_cap_cuts_and_then_stops_with_a_message():
     # The block rests on a frictionless base and moves sideways: its contacts start locked and
     # must turn to sliding, which needs a second solve at any Δt. With a cap of one solve the
