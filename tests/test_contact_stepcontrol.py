@@ -78,3 +78,40 @@ def test_contacts_are_committed_on_the_state():
 def test_bad_settings_are_refused_by_name(field, value):
     with pytest.raises(ValueError, match=field):
         srdda.RunSettings(dt=1e-3, n_steps=1, **{field: value})
+
+
+def test_automatic_penalty_is_a_multiple_of_young():
+    # plane stress: 1/C11 = E exactly
+    arrays = _falling_block_over_far_ground().arrays()
+    s = srdda.RunSettings(dt=1e-3, n_steps=1, auto_penalty=50.0, shear_ratio=0.5)
+    p = srdda.simulation.contact_parameters(arrays, s, 51.0)
+    assert p.normal_stiffness == pytest.approx(50.0 * 1e9, rel=1e-12)
+    assert p.shear_stiffness == pytest.approx(25.0 * 1e9, rel=1e-12)
+    assert p.distance == pytest.approx(2.5 * 0.01 * 51.0, rel=1e-12)  # d0 = 2.5 g2 w0
+
+
+def test_contact_settings_round_trip_through_the_model_file(tmp_path):
+    from srdda.io.modelfile import load_model, save_model
+
+    settings = srdda.RunSettings(dt=1e-3, n_steps=5, contacts=True, contact_penalty=3e9, shear_ratio=0.25,
+                                 max_displacement_ratio=0.002, contact_angle_tolerance=5.0,
+                                 open_close_max_iterations=9, min_dt=1e-8)
+    save_model(_falling_block_over_far_ground(), settings, tmp_path / "m.toml")
+    _, loaded = load_model(tmp_path / "m.toml")
+    assert loaded == settings
+
+
+def _examples():
+    from srdda.paper import examples_dir
+
+    return examples_dir()
+
+
+def test_bad_contact_setting_in_a_model_file_names_the_field(tmp_path):
+    from srdda.io.modelfile import ModelFileError, load_model
+
+    text = (_examples() / "paper" / "rockfall.toml").read_text().replace(
+        "max_displacement_ratio = 0.001", "max_displacement_ratio = 0")
+    (tmp_path / "bad.toml").write_text(text)
+    with pytest.raises(ModelFileError, match="max_displacement_ratio"):
+        load_model(tmp_path / "bad.toml")
