@@ -115,3 +115,37 @@ def test_joint_material_chosen_per_edge():
     assert d < 1e-4
     d_free, res = _travel(_incline_model(0.0), "srdda", t_end=0.5)
     assert abs(d_free / (0.5 * G * np.sin(ALPHA) * res.time[-1] ** 2) - 1) < 5e-3
+
+
+def _spinning_corner_impact():
+    """A 1 x 0.5 m block tilted 20°, its lowest corner on a fixed base, spinning into it at 8 rad/s."""
+    m = srdda.Model(gravity=(0.0, -G))
+    m.add_material("rock", srdda.Material(density=2500.0, young=1e10, poisson=0.25))
+    m.add_joint_material("joint", JointMaterial(friction_angle=30.0), between=[("rock", "rock")])
+    m.add_block([[-3, -1], [3, -1], [3, 0], [-3, 0]], "rock", fixed=True)
+    m.add_block(_rotate([[0, 0], [1, 0], [1, 0.5], [0, 0.5]], np.radians(20.0)), "rock", velocity=(0.5, -0.5),
+                angular_velocity=8.0)
+    return m
+
+
+@pytest.mark.parametrize("method, bound", [("srdda", 1e-12), ("dda0", 1e-12)])
+def test_contact_sees_the_displacement_the_update_makes(method, bound):
+    # The end-of-step gap the contact springs were solved for (linear in Δd through the method's
+    # shape function) against the gap of the vertex where the update actually put it. Under
+    # srdda the contact uses T_sec at the converged rotation increment, so the two agree to
+    # rounding (the secant loop stops at |Δθ|·|δθ| < 1e-13); dda0 moves vertices by T·Δd itself.
+    # Under dda1 (Shi's T, exact-rotation update) they differ by about r·Δθ²/2 = 2e-6 m.
+    model = _spinning_corner_impact()
+    res = srdda.run(model, srdda.RunSettings(dt=2e-3, n_steps=1, method=method, penalty=1e10))
+    state, c = res.final_state, res.final_state.contacts
+    arrays = model.arrays()
+    p0 = state.vertices[c.edge]
+    d = state.vertices[arrays.next_vertex[c.edge]] - p0
+    normal = np.column_stack([d[:, 1], -d[:, 0]]) / np.linalg.norm(d, axis=1)[:, None]
+    actual = np.einsum("nk,nk->n", state.vertices[c.vertex] - p0, normal)
+    assert np.all(c.closed) and np.all(c.gap < 0)  # the corner was driven into the base
+    assert np.max(np.abs(c.gap - actual)) < bound
+    if method == "srdda":
+        dda1 = srdda.run(model, srdda.RunSettings(dt=2e-3, n_steps=1, method="dda1", penalty=1e10)).final_state
+        actual1 = np.einsum("nk,nk->n", dda1.vertices[dda1.contacts.vertex] - p0, normal)
+        assert np.max(np.abs(dda1.contacts.gap - actual1)) > 1e-7  # the test can tell the difference
