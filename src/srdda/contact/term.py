@@ -11,6 +11,7 @@ the :class:`ContactSet` to store on the accepted state.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,6 +22,9 @@ from .narrowphase import detect_contacts, previous_vertex_index
 from .openclose import LOCKED, OPEN, SLIDING, next_states
 from .springs import ContactGeometry, bond_length, contact_geometry
 from .transfer import contact_keys, match_previous
+
+if TYPE_CHECKING:  # simulation imports this module
+    from ..simulation import StepContext
 
 __all__ = ["ContactParameters", "ContactSet", "ContactTerm", "ContactModel", "FREEZE_AFTER", "SETTLE_AFTER"]
 
@@ -102,7 +106,7 @@ class ContactTerm:
         return len(self.state)
 
     # -- StepTerm -----------------------------------------------------------
-    def add_to(self, system: BlockSystem, ctx) -> None:
+    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         g = self.geometry
         a, b = g.vertex_block, g.edge_block
         tv = ctx.shape_at(a, g.point)
@@ -130,7 +134,7 @@ class ContactTerm:
             np.add.at(system.rhs, a[sliding], np.einsum("nki,nk->ni", tv[sliding], force))
             np.add.at(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tq[sliding], force))
 
-    def converged(self, dd: np.ndarray, ctx) -> bool:
+    def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         assert self._shapes is not None
         g = self.geometry
         tv, tq, tr = self._shapes
