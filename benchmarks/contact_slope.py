@@ -80,7 +80,8 @@ def main(steps: int, profile: bool) -> None:
         prof.disable()
     wall = time.perf_counter() - t0
     contacts = res.final_state.contacts
-    print(f"status {res.status}; {steps} steps in {wall:.1f} s: {steps / wall:.2f} steps/s; simulated {res.time[-1]:.4f} s")
+    print(f"status {res.status}; {steps} steps in {wall:.1f} s: {steps / wall:.2f} steps/s; "
+          f"simulated {res.time[-1]:.4f} s")
     print(f"solves per step: mean {np.mean(solves[1:]):.2f}, max {max(solves[1:])}")
     print(f"contacts at the end: {len(contacts.vertex)} ({int(np.count_nonzero(contacts.closed))} closed), "
           f"max penetration {max(res.max_penetration):.2e} m")

@@ -18,7 +18,8 @@ def _falling_block_over_far_ground(gap=100.0):
 
 @pytest.mark.parametrize("method, rho", [("dda0", 1.0), ("dda1", 1.0), ("srdda", 1.0), ("srdda", 0.5)])
 def test_free_fall_with_cut_steps_keeps_v_equal_g_t(method, rho):
-    # w0 = 51 m (the model is 102 m high), g2 = 2e-6: a step may move 1e-4 m, so the 10 ms steps get cut again and again.
+    # w0 = 51 m (the model is 102 m high), g2 = 2e-6: a step may move 1e-4 m, so the 10 ms steps
+    # get cut again and again.
     # Every scheme integrates constant acceleration exactly, whatever the step sizes: v = g t and
     # y = -g t²/2 to rounding (1e-12 relative).
     settings = srdda.RunSettings(dt=0.01, n_steps=60, method=method, rho_inf=rho, max_displacement_ratio=2e-6)

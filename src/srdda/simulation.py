@@ -490,7 +490,8 @@ class StepControl:
             return new, solves, dt
         moved = float(np.max(np.hypot(*(new.vertices - state.vertices).T)))
         if moved > self.max_displacement:
-            raise StepRejected(f"step {new.step}: a vertex moved {moved:.3g} m > g2·w0 = {self.max_displacement:.3g} m",
+            raise StepRejected(f"step {new.step}: a vertex moved {moved:.3g} m > g2·w0 = "
+                               f"{self.max_displacement:.3g} m",
                                max(s.step_cut_factor, min(0.9, 0.9 * self.max_displacement / moved)))
         if term is not None and term.max_penetration > term.params.max_penetration:
             raise StepRejected(f"step {new.step}: penetration {term.max_penetration:.3g} m > "

@@ -241,7 +241,8 @@ class ContactModel:
         geom = contact_geometry(vertices, arr.vertex_block, arr.next_vertex, found[:, 0], found[:, 1])
         previous = previous if previous is not None else ContactSet.empty()
         nv = len(vertices)
-        old = match_previous(contact_keys(found[:, 0], found[:, 1], nv), contact_keys(previous.vertex, previous.edge, nv))
+        old = match_previous(contact_keys(found[:, 0], found[:, 1], nv),
+                             contact_keys(previous.vertex, previous.edge, nv))
         kept = old >= 0
         src = old[kept]
         state = np.where(geom.gap <= 0.0, LOCKED, OPEN).astype(np.int8)
