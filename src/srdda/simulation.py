@@ -77,6 +77,9 @@ class RunSettings:
     contact_angle_tolerance: float = 3.0  # degrees, Shi's angle criterion
     penetration_fraction: float = 0.4  # a step that penetrates deeper than this × d0 is cut
     open_close_max_iterations: int = 20  # state-changing solves of a step before it is cut and repeated
+    friction_tolerance: float = 1e-3  # relative settling of a sliding contact's normal force
+    open_close_freeze_after: int = 2  # state changes of one contact in a step after which it is held
+    open_close_settle_after: int = 8  # solves after which contacts may only close, open clearly or slip
     step_cut_factor: float = 1.0 / 3.0  # Δt ← factor·Δt when a step is cut
     min_dt: float | None = None  # the run stops if Δt falls below this; None: 1e-6 × dt
 
@@ -98,8 +101,11 @@ class RunSettings:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
         if not 0.0 <= self.contact_angle_tolerance < 45.0:
             raise ValueError(f"contact_angle_tolerance must lie in [0, 45) degrees, got {self.contact_angle_tolerance}")
-        if self.open_close_max_iterations < 1:
-            raise ValueError("open_close_max_iterations must be >= 1")
+        for name in ("open_close_max_iterations", "open_close_freeze_after", "open_close_settle_after"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if not self.friction_tolerance > 0:
+            raise ValueError(f"friction_tolerance must be > 0, got {self.friction_tolerance}")
         if not 0.0 < self.step_cut_factor < 1.0:
             raise ValueError(f"step_cut_factor must lie in (0, 1), got {self.step_cut_factor}")
         self.resolved_method()
@@ -447,7 +453,8 @@ def contact_parameters(arrays: ModelArrays, settings: RunSettings, w0: float) ->
         kn = settings.auto_penalty * float(np.max(young)) * 1.0  # × unit thickness
     d0 = settings.contact_distance_factor * settings.max_displacement_ratio * w0
     return ContactParameters(kn, settings.shear_ratio * kn, d0, np.radians(settings.contact_angle_tolerance),
-                             settings.penetration_fraction * d0)
+                             settings.penetration_fraction * d0, settings.friction_tolerance,
+                             settings.open_close_freeze_after, settings.open_close_settle_after)
 
 
 @dataclass(frozen=True)

@@ -26,10 +26,7 @@ from .transfer import contact_keys, match_previous
 if TYPE_CHECKING:  # simulation imports this module
     from ..simulation import StepContext
 
-__all__ = ["ContactParameters", "ContactSet", "ContactTerm", "ContactModel", "FREEZE_AFTER", "SETTLE_AFTER"]
-
-FREEZE_AFTER = 2  # state changes of one contact within a step after which its state is kept
-SETTLE_AFTER = 8  # solves after which no contact may reopen or relock and friction is not re-iterated
+__all__ = ["ContactParameters", "ContactSet", "ContactTerm", "ContactModel"]
 
 
 @dataclass(frozen=True)
@@ -41,6 +38,9 @@ class ContactParameters:
     distance: float  # d0 (m): contact search distance
     angle_tolerance: float  # rad, Shi's angle criterion
     max_penetration: float  # m: a step that penetrates deeper is cut
+    friction_tolerance: float = 1e-3  # relative settling of the friction normal force
+    freeze_after: int = 2  # state changes of one contact in a step after which its state is kept
+    settle_after: int = 8  # solves after which no contact reopens or relocks, friction is not re-iterated
 
 
 @dataclass(frozen=True)
@@ -146,24 +146,24 @@ class ContactTerm:
         self.closed_this_step |= (self.state == OPEN) & (self.gap < 0)
         state, sign, changed, unsettled = next_states(self.state, self.sign, self.gap, self.shear, p.normal_stiffness,
                                            p.shear_stiffness, self.tan_phi, self.cohesion_force, self.tension_force,
-                                           self.closed_this_step, self.friction_normal)
-        # a contact that has already changed state FREEZE_AFTER times in this step keeps its state,
+                                           self.closed_this_step, self.friction_normal, p.friction_tolerance)
+        # a contact that has already changed state ``freeze_after`` times in this step keeps its state,
         # so that the iteration ends (it may carry a little tension for one step; the next step
         # starts from the actual gap). Closing a clearly penetrating contact, opening a clearly
         # open one and letting a locked one slip are never held back: they keep forces bounded
         # and store no spurious energy.
         # (never frozen LOCKED against a slip: a locked spring past its strength would keep
         # loading from step to step)
-        # After SETTLE_AFTER solves every contact is held so, to settle cascades in large systems.
+        # After ``settle_after`` solves every contact is held so, to settle cascades in large systems.
         band = 1e-6 * p.distance  # clearly open or penetrating, not by rounding at a zero gap
         safe = (((self.state == LOCKED) & (state == SLIDING)) | ((self.state == OPEN) & (self.gap < -band))
                 | ((self.state != OPEN) & (state == OPEN) & (self.gap > band)))
-        limit = 0 if self.iterations >= SETTLE_AFTER else FREEZE_AFTER
+        limit = 0 if self.iterations >= p.settle_after else p.freeze_after
         frozen = (self.flips >= limit) & (state != self.state) & ~safe
         state = np.where(frozen, self.state, state).astype(np.int8)
         sign = np.where(frozen, self.sign, sign).astype(np.int8)
         changed = np.where(frozen, False, changed)
-        if self.iterations < SETTLE_AFTER:  # then friction forces are taken as they are
+        if self.iterations < p.settle_after:  # then friction forces are taken as they are
             changed = changed | unsettled
         self.flips += state != self.state
         self.normal_force = np.maximum(-p.normal_stiffness * self.gap, 0.0)

@@ -55,13 +55,17 @@ class RunSection(_Strict):
     contact_angle_tolerance: Angle = Field(3.0, ge=0, lt=45)
     penetration_fraction: float = Field(0.4, gt=0)
     open_close_max_iterations: int = Field(20, ge=1)
+    friction_tolerance: float = Field(1e-3, gt=0)
+    open_close_freeze_after: int = Field(2, ge=1)
+    open_close_settle_after: int = Field(8, ge=1)
     step_cut_factor: float = Field(1.0 / 3.0, gt=0, lt=1)
     min_dt: Time | None = Field(None, gt=0)
 
 
 CONTACT_RUN_FIELDS = ("contacts", "contact_penalty", "auto_penalty", "shear_ratio", "max_displacement_ratio",
                       "contact_distance_factor", "contact_angle_tolerance", "penetration_fraction",
-                      "open_close_max_iterations", "step_cut_factor", "min_dt")
+                      "open_close_max_iterations", "friction_tolerance", "open_close_freeze_after",
+                      "open_close_settle_after", "step_cut_factor", "min_dt")
 
 
 class MaterialSection(_Strict):
