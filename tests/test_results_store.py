@@ -1,6 +1,7 @@
 """The HDF5 results store: content, crash safety (SIGKILL) and resume."""
 from __future__ import annotations
 
+import dataclasses
 import os
 import signal
 import subprocess
@@ -158,3 +159,36 @@ def test_sigkill_leaves_every_flushed_step_and_resume_matches(tmp_path: Path, me
         assert _max_relative(getattr(final, name), getattr(reference.final_state, name)) <= 1e-12, name
     assert _max_relative(resumed.velocity, reference.array("velocity")) <= 1e-12
     assert _max_relative(resumed.measured_position, reference.array("measured_position")) <= 1e-12
+
+
+def test_resume_with_contacts_and_cut_steps_is_exact(tmp_path: Path) -> None:
+    # A block dropped onto a fixed base with a tight g2: the step-size control cuts
+    # and regrows Δt, and the contact set persists between steps. Both live on the
+    # State, so a resumed run must equal the uninterrupted one (to 1e-12 relative).
+    def model() -> srdda.Model:
+        m = srdda.Model(gravity=(0.0, -10.0))
+        m.add_material("rock", srdda.Material(2500.0, 1e9, 0.25))
+        m.add_block([[-2, -1], [2, -1], [2, 0], [-2, 0]], "rock", fixed=True)
+        m.add_block([[-0.5, 0.05], [0.5, 0.05], [0.5, 0.55], [-0.5, 0.55]], "rock", angular_velocity=0.3)
+        return m
+
+    settings = srdda.RunSettings(dt=2e-3, n_steps=160, method="srdda", penalty=1e10, max_displacement_ratio=0.002)
+    reference = srdda.run(model(), settings)
+    assert reference.completed
+    steps_dt = np.diff(reference.array("time"))
+    touching = np.asarray(reference.closed_contacts) > 0
+    # step k ran with a cut Δt while the block was in contact
+    cut = [k for k in range(20, 140) if steps_dt[k - 1] < 0.9 * settings.dt and touching[k]]
+    assert cut, "the model must exercise the step-size control during contact"
+    half = dataclasses.replace(settings, n_steps=cut[0])
+    path = tmp_path / "contact.h5"
+    # the file holds the whole run's settings; the first process stops half-way (as if killed)
+    first = srdda.run(model(), half, recorders=[ResultsStore(path, settings, flush_every=10)])
+    assert first.final_state.contacts is not None and first.final_state.dt_next < settings.dt
+    resumed = resume(path, model().arrays())
+    ref_state = reference.final_state
+    got = resumed.final_state
+    assert got.step == ref_state.step
+    for name in ("vertices", "velocity", "stress", "rotation"):
+        a, b = getattr(got, name), getattr(ref_state, name)
+        assert np.max(np.abs(a - b)) <= 1e-12 * max(1.0, np.max(np.abs(b))), name

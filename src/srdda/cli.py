@@ -126,8 +126,9 @@ def print_rows(rows: list[dict]) -> None:
     header = ("table", "quantity", "step", "method", "ours", "paper", "exact", "RE ours", "RE paper")
     lines = [header]
     for r in rows:
+        digits = 0 if isinstance(r["paper"], int) else 6  # counts (contact steps) print as counts
         lines.append((r["table"], r["quantity"], "-" if r["step"] is None else str(r["step"]), r["method"],
-                      _fmt(r["ours"]), _fmt(r["paper"]), _fmt(r["exact"]),
+                      _fmt(r["ours"], digits), _fmt(r["paper"], digits), _fmt(r["exact"], digits),
                       _pct(relative_error(r["ours"], r["exact"])),
                       _pct(None if r["paper"] is None else relative_error(r["paper"], r["exact"]))))
     widths = [max(len(line[i]) for line in lines) for i in range(len(header))]

@@ -197,6 +197,8 @@ def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = ME
 
 # -- tables ---------------------------------------------------------------------------
 def _decimals(paper: float | None) -> int:
+    if isinstance(paper, int):  # a count (e.g. a contact step): ours is a count too
+        return -2
     if paper is None:
         return 6
     text = repr(float(paper))
@@ -233,7 +235,9 @@ def pivot_table(rows: Sequence[dict], methods: Sequence[str]) -> tuple[list[str]
                 continue
             d = _decimals(r["paper"]) + 2
             line.append(f"{r['ours']:.{d}f}{_re(r['ours'], exact)}")
-            line.append("" if r["paper"] is None else f"{repr(float(r['paper']))}{_re(r['paper'], exact)}")
+            paper = r["paper"]
+            shown = str(paper) if isinstance(paper, int) else repr(float(paper)) if paper is not None else ""
+            line.append("" if paper is None else f"{shown}{_re(paper, exact)}")
         body.append(line)
     return header, body
 

@@ -130,6 +130,7 @@ class State:
     multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))  # μ of the last step (constraint rows)
     ledger: np.ndarray = field(default_factory=lambda: np.zeros(len(LEDGER)))  # cumulative work, see LEDGER
     contacts: ContactSet | None = None  # contacts as the step that led here ended them
+    dt_next: float | None = None  # the step-size control's Δt for the next step (None: the run's dt)
 
 
 class Recorder(Protocol):
@@ -416,10 +417,11 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     control = StepControl.of(arrays, settings)
     last_step = state.step + settings.n_steps
     status = "completed"
-    dt = settings.dt
+    dt = state.dt_next if state.dt_next is not None else settings.dt
     while state.step < last_step:
         try:
             state, solves, dt = control.step(arrays, state, method, dt, solver)
+            state = replace(state, dt_next=dt)
         except StepRejected as exc:
             dt *= exc.factor
             if dt < control.min_dt:
