@@ -17,6 +17,7 @@ from tqdm import tqdm
 from . import __version__
 from .integrators.methods import METHODS
 from .cli_results import animate_command, plot_command, report_paper, resume_run, vtk_command
+from .io.convert import convert
 from .io.modelfile import ModelFileError, load_model
 from .io.results_store import ResultsStore
 from .paper import EXAMPLES, relative_error, run_example
@@ -185,6 +186,8 @@ def paper_command(example: str, method: str, as_json: bool, report_dir: str | No
 main.add_command(plot_command)
 main.add_command(animate_command)
 main.add_command(vtk_command)
+
+main.add_command(convert)
 
 if __name__ == "__main__":
     main()

@@ -1,0 +1,216 @@
+"""The content of an existing DDA input (geometry + analysis files) and its srdda model.
+
+:mod:`srdda.io.legacy` (Shi's text files) and :mod:`srdda.io.ddaml` (DDA for
+Windows XML) both fill a :class:`DDAInput`; :meth:`DDAInput.to_model` cuts the
+blocks (:func:`srdda.geometry.cutting.cut_blocks`) and maps the parameters onto
+srdda's (the table is in ``docs/cutting.md``). Everything srdda does not
+support is reported with ``warnings.warn`` naming it.
+"""
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..geometry.cutting import NO_JOINT, BlockCut, CuttingError, cut_blocks
+from ..model import JointMaterial, Material, Model, ModelError
+from ..simulation import RunSettings
+
+__all__ = ["DDAInput", "DDAInputError", "domain_scale"]
+
+MERGE_FACTOR = 1.25  # DC merges intersections closer than 1.25 e00 w0 (ntdda geometry code)
+
+
+class DDAInputError(ValueError):
+    """An existing DDA input file is unreadable (the message names the file and the item)."""
+
+
+def domain_scale(segments: np.ndarray) -> float:
+    """Shi's drawing scale w0 of the joint lines (ntdda ``computeDomainscale``).
+
+    Half the height of the bounding box, or half the width / 1.3 when the
+    box is wider than 1.3 times its height, times 1.02. The edge-node
+    distance of DDA files is a ratio to w0.
+    """
+    pts = np.asarray(segments, dtype=float).reshape(-1, 2)
+    half_w, half_h = np.ptp(pts, axis=0) / 2.0
+    w0 = half_w / 1.3 if half_w > 1.3 * half_h else half_h
+    return float(w0 * 1.02)
+
+
+@dataclass
+class BlockMaterialSpec:
+    """A DDA block material as written in the files (units as the author used)."""
+
+    unit_mass: float
+    unit_weight: float
+    young: float
+    poisson: float
+    stress: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    strain: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    damping: float = 0.0
+
+
+@dataclass
+class DDAInput:
+    """Geometry and analysis data of a DDA input, in the files' own terms."""
+
+    source: str
+    edge_node_ratio: float  # e00 (g1): edge-node distance / w0
+    joints: np.ndarray  # (n, 4)
+    joint_types: np.ndarray  # (n,)
+    material_lines: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    material_line_types: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    fixed_lines: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))  # points: x1 = x2, y1 = y2
+    load_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    measured_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    hole_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    # analysis
+    dynamic: bool = True
+    n_steps: int = 0
+    max_displacement_ratio: float = 0.01  # g2
+    max_time_step: float = 0.01
+    penalty_factor: float = 50.0
+    auto_time_step: bool = False
+    auto_penalty: bool = False
+    plane_strain: bool = False
+    save_interval: int = 1
+    rotation: str = "linear"
+    gravity_acceleration: float | None = None  # None: unit weight / unit mass
+    open_close_limit: int | None = None
+    block_materials: list[BlockMaterialSpec] = field(default_factory=list)
+    joint_materials: list[tuple[float, float, float]] = field(default_factory=list)  # (phi deg, c, t)
+    load_histories: list[np.ndarray] = field(default_factory=list)  # (k, 3) rows (t, fx, fy)
+
+    # -- geometry ------------------------------------------------------------
+    @property
+    def edge_node_distance(self) -> float:
+        """Absolute merge distance of the cutting: 1.25 e00 w0, as Shi's DC."""
+        return MERGE_FACTOR * self.edge_node_ratio * domain_scale(self.joints)
+
+    def cut(self) -> BlockCut:
+        """Blocks cut from the joint lines (all closed loops are blocks, as in Shi's DC)."""
+        try:
+            return cut_blocks(self.joints, self.joint_types, edge_node_distance=self.edge_node_distance,
+                              hole_points=self.hole_points, material_lines=self.material_lines,
+                              material_line_types=self.material_line_types, default_material=1)
+        except CuttingError as exc:
+            raise DDAInputError(f"{self.source}: {exc}") from None
+
+    # -- parameters ------------------------------------------------------------
+    def gravity(self) -> float:
+        """Gravitational acceleration: the file's value, else unit weight / unit mass of material 1."""
+        if self.gravity_acceleration is not None:
+            return self.gravity_acceleration
+        ratios = [m.unit_weight / m.unit_mass for m in self.block_materials if m.unit_mass > 0]
+        if not ratios:
+            return 0.0
+        if not np.allclose(ratios, ratios[0], rtol=1e-3):
+            warnings.warn(f"{self.source}: unit weight / unit mass differs between block materials "
+                          f"({', '.join(f'{r:g}' for r in ratios)}); gravity taken from material 1", stacklevel=3)
+        return float(ratios[0])
+
+    def run_parameters(self) -> dict[str, Any]:
+        """All run parameters of the file mapped to srdda names (a plain dict)."""
+        young = max((m.young for m in self.block_materials), default=0.0)
+        return {
+            "method": "dda0" if self.rotation == "linear" else "dda1",
+            "dt": self.max_time_step,
+            "n_steps": self.n_steps,
+            "penalty": self.penalty_factor * young,
+            "record_every": max(1, self.save_interval),
+            "max_displacement_ratio": self.max_displacement_ratio,
+            "auto_time_step": self.auto_time_step,
+            "auto_penalty": self.auto_penalty,
+            "dynamic": self.dynamic,
+            "open_close_limit": self.open_close_limit,
+        }
+
+    def run_settings(self) -> RunSettings:
+        """RunSettings from :meth:`run_parameters`; parameters RunSettings has no field for are warned about."""
+        params = self.run_parameters()
+        known = {f.name for f in dataclasses.fields(RunSettings)}
+        unsupported = {k: v for k, v in params.items() if k not in known}
+        if not params["dynamic"]:
+            warnings.warn(f"{self.source}: static analysis (velocities reset every step) is not supported; "
+                          "converted as a dynamic run", stacklevel=2)
+        for flag in ("auto_time_step", "auto_penalty"):
+            if unsupported.get(flag):
+                warnings.warn(f"{self.source}: {flag} is not supported; the fixed time step / penalty "
+                              "of the file is used", stacklevel=2)
+        for name in ("max_displacement_ratio", "open_close_limit"):
+            if name in unsupported and unsupported[name] is not None:
+                warnings.warn(f"{self.source}: {name} = {unsupported[name]} is not used by srdda's RunSettings "
+                              "yet (contact settings)", stacklevel=2)
+        try:
+            return RunSettings(**{k: v for k, v in params.items() if k in known})
+        except ValueError as exc:
+            raise DDAInputError(f"{self.source}: run settings: {exc}") from None
+
+    # -- model ------------------------------------------------------------------
+    def to_model(self, cut: BlockCut | None = None) -> Model:
+        """The srdda Model: blocks, materials, joint materials, fixed/load/measured points, gravity."""
+        cut = self.cut() if cut is None else cut
+        model = Model(gravity=(0.0, -self.gravity()))
+        plane = "strain" if self.plane_strain else "stress"
+        used = np.unique(cut.block_material)
+        for k in used:
+            if not 1 <= k <= len(self.block_materials):
+                raise DDAInputError(f"{self.source}: blocks use material {k} but "
+                                    f"{len(self.block_materials)} block material(s) are defined")
+        for k, m in enumerate(self.block_materials, start=1):
+            if any(m.strain):
+                warnings.warn(f"{self.source}: initial strain of block material {k} is not supported "
+                              "(ignored)", stacklevel=2)
+            if m.damping:
+                warnings.warn(f"{self.source}: damping {m.damping:g} of block material {k} is not supported "
+                              "(ignored)", stacklevel=2)
+            try:
+                model.add_material(f"material {k}", Material(density=m.unit_mass, young=m.young,
+                                                             poisson=m.poisson, plane=plane))
+            except ModelError as exc:
+                raise DDAInputError(f"{self.source}: block material {k}: {exc}") from None
+        for k, (phi, c, t) in enumerate(self.joint_materials, start=1):
+            try:
+                model.add_joint_material(f"joint {k}", JointMaterial(phi, c, t))
+            except ModelError as exc:
+                raise DDAInputError(f"{self.source}: joint material {k}: {exc}") from None
+        types = np.unique(cut.edge_joint[cut.edge_joint != NO_JOINT])
+        missing = [int(t) for t in types if not 1 <= t <= len(self.joint_materials)]
+        if missing:
+            raise DDAInputError(f"{self.source}: joint type(s) {missing} have no joint properties "
+                                f"({len(self.joint_materials)} defined)")
+        names = np.array([None] + [f"joint {k}" for k in range(1, len(self.joint_materials) + 1)], dtype=object)
+        for b in range(cut.n_blocks):
+            verts, joints = cut.block(b)
+            spec = self.block_materials[cut.block_material[b] - 1]
+            model.add_block(verts, f"material {cut.block_material[b]}", velocity=spec.velocity[:2],
+                            angular_velocity=spec.velocity[2], stress=spec.stress,
+                            edge_joints=list(names[np.where(joints == NO_JOINT, 0, joints)]))
+        self._add_points(model, cut)
+        return model
+
+    def _add_points(self, model: Model, cut: BlockCut) -> None:
+        try:
+            pts, blocks = cut.line_points(self.fixed_lines, "fixed point/line")
+            for p, b in zip(pts, blocks):
+                model.add_fixed_point(p, block=int(b))
+            load_blocks = cut.locate(self.load_points, "load point")
+            measured_blocks = cut.locate(self.measured_points, "measured point")
+        except CuttingError as exc:
+            raise DDAInputError(f"{self.source}: {exc}") from None
+        if len(self.load_points) and len(self.load_histories) != len(self.load_points):
+            raise DDAInputError(f"{self.source}: {len(self.load_points)} load point(s) but "
+                                f"{len(self.load_histories)} load time histories")
+        for p, b, table in zip(self.load_points, load_blocks, self.load_histories):
+            force: object = table[0, 1:] if len(table) == 1 else table
+            try:
+                model.add_point_load(p, force, block=int(b))
+            except ModelError as exc:
+                raise DDAInputError(f"{self.source}: load point at {tuple(p)}: {exc}") from None
+        for p, b in zip(self.measured_points, measured_blocks):
+            model.add_measured_point(p, block=int(b))
