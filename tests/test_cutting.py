@@ -61,7 +61,7 @@ def test_random_joints_tile_the_domain(joints, width, height, opening, d_rel):
     area = width * height - sum(shapely.Polygon(o).area for o in openings)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the split-opening warning is tested below
-        cut = cut_blocks(segs, np.arange(len(segs)) + 1, edge_node_distance=d_rel * min(width, height),
+        cut = cut_blocks(segs, np.arange(len(segs)) + 1, edge_node_distance=d_rel * max(width, height),
                          boundary=boundary, openings=openings)
     _check_tiling(cut, area)
 

@@ -271,12 +271,15 @@ def _merge_close_nodes(edges: np.ndarray, distance: float, rank_of: callable,
     return moved, True
 
 
-def _snap_nodes_to_edges(edges: np.ndarray, distance: float, fixed_edge: callable) -> tuple[np.ndarray, bool]:
+def _snap_nodes_to_edges(edges: np.ndarray, distance: float, fixed_edge: callable,
+                         rank_of: callable) -> tuple[np.ndarray, bool]:
     """Split every edge passing closer than ``distance`` to a node not its own at that node.
 
     A node near a boundary edge (``fixed_edge`` true) moves onto the edge (its
-    projection) so the domain keeps its shape; near any other edge the edge is
-    split at the node itself. Each node snaps to its nearest such edge.
+    projection) so the domain keeps its shape, unless the node is itself on
+    the boundary (rank >= 2: it stays, the boundary edge is left alone); near
+    any other edge the edge is split at the node itself. Each node snaps to
+    its nearest such edge.
     """
     nodes, inverse = np.unique(edges.reshape(-1, 2), axis=0, return_inverse=True)
     ends = inverse.reshape(-1, 2)
@@ -284,6 +287,11 @@ def _snap_nodes_to_edges(edges: np.ndarray, distance: float, fixed_edge: callabl
     inode, iedge = shapely.STRtree(lines).query(shapely.points(nodes), predicate="dwithin", distance=distance)
     own = (ends[iedge, 0] == inode) | (ends[iedge, 1] == inode)
     inode, iedge = inode[~own], iedge[~own]
+    if len(inode) == 0:
+        return edges, False
+    boundary_node = rank_of(nodes)[inode] >= 2
+    movable = ~(boundary_node & fixed_edge(edges[iedge]))
+    inode, iedge = inode[movable], iedge[movable]
     if len(inode) == 0:
         return edges, False
     a, b = edges[iedge, 0], edges[iedge, 1]
@@ -423,7 +431,7 @@ def cut_blocks(
         if d <= 0:
             break
         edges, merged = _merge_close_nodes(edges, d, rank_of, ring_edge_of)
-        edges, snapped = _snap_nodes_to_edges(edges, d, on_ring)
+        edges, snapped = _snap_nodes_to_edges(edges, d, on_ring, rank_of)
         if not (merged or snapped):
             break
         edges = _explode_edges(shapely.unary_union(shapely.linestrings(edges)))
