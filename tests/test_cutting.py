@@ -198,3 +198,26 @@ def test_joint_sets_trace_length_bridge_and_seed():
     inside = shapely.within(shapely.linestrings(a.reshape(-1, 2, 2)), shapely.Polygon(domain))
     assert np.all(shapely.covered_by(shapely.linestrings(a.reshape(-1, 2, 2)), shapely.Polygon(domain)))
     assert inside.sum() > 0
+
+
+def test_add_cut_blocks_maps_materials_joints_and_fixed():
+    import srdda
+    from srdda.model import JointMaterial
+
+    cut = cut_blocks([(0.5, 0, 0.5, 1)], [1], edge_node_distance=1e-3, boundary=SQUARE, boundary_type=0,
+                     material_points=[(0.75, 0.5)], material_point_types=[2])
+    model = srdda.Model()
+    model.add_material("a", srdda.Material(1000.0, 1e9, 0.2))
+    model.add_material("b", srdda.Material(2000.0, 1e9, 0.2))
+    model.add_joint_material("j", JointMaterial(friction_angle=20.0))
+    left = int(cut.locate([(0.25, 0.5)])[0])
+    fixed = np.arange(cut.n_blocks) == left
+    srdda.add_cut_blocks(model, cut, materials={0: "a", 2: "b"}, joints={1: "j"}, fixed=fixed)
+    arrays = model.arrays()
+    assert arrays.block_fixed.tolist() == fixed.tolist()
+    assert sorted(arrays.block_material.tolist()) == [0, 1]
+    # exactly one edge of each block lies on the joint x = 0.5 (joint index 1); the others: by materials
+    assert np.bincount(arrays.vertex_block[arrays.edge_joint == 1]).tolist() == [1, 1]
+    assert np.sum(arrays.edge_joint == -1) == 6
+    with pytest.raises(srdda.ModelError, match="material label"):
+        srdda.add_cut_blocks(srdda.Model(), cut, materials={0: "a"})

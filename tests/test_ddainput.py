@@ -105,3 +105,25 @@ def test_every_shared_dda_input_loads(geo):
         data.run_settings()
     assert len(model.blocks) >= 1
     model.arrays()
+
+
+def test_domain_types_keep_only_blocks_inside_the_type_boundary():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        data = read_ddaml(DATA / "tiny_ddaml.geo", DATA / "tiny_ddaml.ana")
+    assert data.cut().n_blocks == 2
+    inside = data.cut(domain_types=[1])
+    assert inside.n_blocks == 1
+    assert abs(inside.areas()[0] - 4.0) < 1e-14  # the 4 x 1 base enclosed by the type-1 joints
+
+
+EXAMPLES = Path(__file__).parents[1] / "examples" / "cutting"
+
+
+@pytest.mark.parametrize("name,blocks", [("jointed_slope", 38), ("tunnel", 71), ("masonry_arch", 17)])
+def test_cutting_example_model_files_load(name, blocks):
+    model, _ = load_model(EXAMPLES / f"{name}.toml")
+    assert len(model.blocks) == blocks
+    arrays = model.arrays()
+    assert arrays.block_fixed.any() and not arrays.block_fixed.all()
+    assert (arrays.edge_joint > 0).any()  # the joint sets' materials reached the block edges

@@ -19,6 +19,9 @@ from .model import JointMaterial, Load, Material, Model, ModelError
 from .simulation import DivergenceError, Result, RunSettings, State, StepRejected, run
 from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume
+from .geometry.cutting import BlockCut, CuttingError, cut_blocks
+from .geometry.jointsets import JointSet, circular_opening, joint_traces, polygonal_opening
+from .cutmodel import add_cut_blocks
 
 __version__ = "0.1.0"
 
@@ -27,4 +30,6 @@ __all__ = [
     "MotionHistory", "PolygonError", "hinge_forces",
     "Result", "RunSettings", "State", "StepRejected", "TimeScheme", "available_solvers", "block_moments",
     "get_solver", "method_preset", "run", "__version__", "ResultsStore", "StoredResult", "read_results", "resume",
+    "BlockCut", "CuttingError", "JointSet", "add_cut_blocks", "circular_opening", "cut_blocks", "joint_traces",
+    "polygonal_opening",
 ]

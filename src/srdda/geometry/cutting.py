@@ -160,6 +160,8 @@ def _as_segments(segments: object, what: str) -> np.ndarray:
 def _as_polygon(poly: object, what: str) -> shapely.Polygon:
     if isinstance(poly, shapely.Polygon):
         geom = poly
+    elif isinstance(poly, shapely.Geometry):
+        raise CuttingError(f"{what}: expected one polygon, got a {poly.geom_type}")
     else:
         v = np.asarray(poly, dtype=float)
         if v.ndim != 2 or v.shape[1] != 2 or len(v) < 3:

@@ -40,7 +40,10 @@ def read_dda(geometry: str | Path, analysis: str | Path | None = None) -> DDAInp
 @click.command("convert")
 @click.argument("files", nargs=-1, required=True, type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), help="The srdda model file to write.")
-def convert(files: tuple[str, ...], output: str) -> None:
+@click.option("--domain-type", "domain_types", type=int, multiple=True,
+              help="Keep only blocks inside the region enclosed by joints of this type (repeatable); "
+                   "default: every closed loop is a block, as in Shi's DC.")
+def convert(files: tuple[str, ...], output: str, domain_types: tuple[int, ...]) -> None:
     """Convert DDA input files (GEOMETRY [ANALYSIS], legacy text or DDAML) to an srdda model file."""
     if len(files) > 2:
         raise click.UsageError("give a geometry file and optionally its analysis file")
@@ -48,7 +51,7 @@ def convert(files: tuple[str, ...], output: str) -> None:
         warnings.simplefilter("always")
         try:
             data = read_dda(files[0], files[1] if len(files) > 1 else None)
-            cut = data.cut()
+            cut = data.cut(list(domain_types) or None)
             model = data.to_model(cut)
             settings = data.run_settings()
         except DDAInputError as exc:

@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import shapely
 
 from ..geometry.cutting import NO_JOINT, BlockCut, CuttingError, cut_blocks
 from ..model import JointMaterial, Material, Model, ModelError
@@ -92,10 +94,28 @@ class DDAInput:
         """Absolute merge distance of the cutting: 1.25 e00 w0, as Shi's DC."""
         return MERGE_FACTOR * self.edge_node_ratio * domain_scale(self.joints)
 
-    def cut(self) -> BlockCut:
-        """Blocks cut from the joint lines (all closed loops are blocks, as in Shi's DC)."""
+    def cut(self, domain_types: Sequence[int] | None = None) -> BlockCut:
+        """Blocks cut from the joint lines.
+
+        By default every closed loop is a block, as in Shi's DC (joint traces
+        running past the boundary can close loops outside the rock mass).
+        With ``domain_types``, the domain is the region enclosed by the joints
+        of those types (e.g. ``[1]`` when type 1 draws the boundary) and only
+        blocks inside it are kept.
+        """
+        boundary = None
+        if domain_types is not None:
+            chosen = np.isin(self.joint_types, np.asarray(domain_types))
+            lines = shapely.linestrings(self.joints[chosen].reshape(-1, 2, 2))
+            faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.unary_union(lines))))
+            boundary = shapely.unary_union(faces)
+            if not isinstance(boundary, shapely.Polygon) or boundary.is_empty:
+                raise DDAInputError(f"{self.source}: joints of type(s) {list(domain_types)} do not enclose "
+                                    "one connected region")
+            boundary = shapely.Polygon(boundary.exterior)
         try:
             return cut_blocks(self.joints, self.joint_types, edge_node_distance=self.edge_node_distance,
+                              boundary=boundary, boundary_type=int(domain_types[0]) if domain_types else 0,
                               hole_points=self.hole_points, material_lines=self.material_lines,
                               material_line_types=self.material_line_types, default_material=1)
         except CuttingError as exc:

@@ -1,0 +1,59 @@
+"""Time of block cutting (Shi's DC step) on the jointed-slope benchmark models.
+
+Reads the DDAML slope files (default: /work/shared/benchmarks/slopes, or a
+directory given with --dir), cuts each with the edge-node distance of the
+file (1.25 e00 w0, as DC), and reports blocks, vertices and the best of
+--repeat cut times; --model also times building the srdda Model.
+
+Usage: python benchmarks/bench_cutting.py [--dir DIR] [--repeat 5] [--model] [--json out.json]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from srdda.io.ddaml import read_ddaml
+
+
+def best_time(fn, repeat: int) -> tuple[float, object]:
+    best, out = np.inf, None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--dir", default="/work/shared/benchmarks/slopes")
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--model", action="store_true", help="also time building the Model from the cut")
+    ap.add_argument("--json", help="write the results to this file")
+    args = ap.parse_args()
+    rows = []
+    for geo in sorted(Path(args.dir).glob("*.geo")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            data = read_ddaml(geo, geo.with_suffix(".ana"))
+            seconds, cut = best_time(data.cut, args.repeat)
+            row = {"model": geo.stem, "joints": len(data.joints), "edge_node_distance": data.edge_node_distance,
+                   "blocks": cut.n_blocks, "vertices": int(cut.block_ptr[-1]), "cut_seconds": seconds}
+            if args.model:
+                row["model_seconds"], _ = best_time(lambda: data.to_model(cut), 1)
+        rows.append(row)
+        print(", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()))
+    info = {"python": platform.python_version(), "machine": platform.machine(), "processor": platform.processor()}
+    print(info)
+    if args.json:
+        Path(args.json).write_text(json.dumps({"machine": info, "rows": rows}, indent=2))
+
+
+if __name__ == "__main__":
+    main()

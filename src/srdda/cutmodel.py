@@ -1,0 +1,38 @@
+"""Blocks of a :class:`~srdda.geometry.cutting.BlockCut` added to a :class:`~srdda.model.Model`."""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from .geometry.cutting import NO_JOINT, BlockCut
+from .model import Model, ModelError
+
+__all__ = ["add_cut_blocks"]
+
+
+def add_cut_blocks(model: Model, cut: BlockCut, materials: Mapping[int, str],
+                   joints: Mapping[int, str | None] | None = None,
+                   fixed: Sequence[bool] | np.ndarray | None = None, prefix: str = "block") -> list[int]:
+    """Add every block of ``cut`` to ``model``; returns their indices.
+
+    ``materials`` maps the cut's material labels to the model's material
+    names; ``joints`` maps joint types to joint-material names (a type not
+    listed, and edges on no joint, take the joint chosen by the block
+    materials). ``fixed`` marks blocks that never move.
+    """
+    joints = {} if joints is None else dict(joints)
+    missing = sorted(set(np.unique(cut.block_material).tolist()) - set(materials))
+    if missing:
+        raise ModelError(f"cut blocks use material label(s) {missing} with no entry in materials")
+    fixed_arr = np.zeros(cut.n_blocks, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
+    if fixed_arr.shape != (cut.n_blocks,):
+        raise ModelError(f"fixed needs one flag per block ({cut.n_blocks}), got {fixed_arr.shape}")
+    out = []
+    for b in range(cut.n_blocks):
+        verts, types = cut.block(b)
+        edge_joints = [None if t == NO_JOINT else joints.get(int(t)) for t in types]
+        out.append(model.add_block(verts, materials[int(cut.block_material[b])], name=f"{prefix} {b}",
+                                   fixed=bool(fixed_arr[b]),
+                                   edge_joints=edge_joints if any(j is not None for j in edge_joints) else None))
+    return out
