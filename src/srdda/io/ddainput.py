@@ -135,37 +135,43 @@ class DDAInput:
         return float(ratios[0])
 
     def run_parameters(self) -> dict[str, Any]:
-        """All run parameters of the file mapped to srdda names (a plain dict)."""
+        """The file's run parameters under srdda's RunSettings names (a plain dict).
+
+        The contact entries (``contact_penalty``, ``max_displacement_ratio``,
+        ``open_close_max_iterations``) carry the names of the contact settings
+        of srdda's RunSettings; a RunSettings without them is told by a warning.
+        """
         young = max((m.young for m in self.block_materials), default=0.0)
-        return {
+        params: dict[str, Any] = {
             "method": "dda0" if self.rotation == "linear" else "dda1",
             "dt": self.max_time_step,
             "n_steps": self.n_steps,
             "penalty": self.penalty_factor * young,
-            "record_every": max(1, self.save_interval),
+            "contact_penalty": self.penalty_factor * young,
             "max_displacement_ratio": self.max_displacement_ratio,
-            "auto_time_step": self.auto_time_step,
-            "auto_penalty": self.auto_penalty,
-            "dynamic": self.dynamic,
-            "open_close_limit": self.open_close_limit,
+            "record_every": max(1, self.save_interval),
         }
+        if self.open_close_limit is not None:
+            params["open_close_max_iterations"] = self.open_close_limit
+        return params
 
     def run_settings(self) -> RunSettings:
-        """RunSettings from :meth:`run_parameters`; parameters RunSettings has no field for are warned about."""
-        params = self.run_parameters()
-        known = {f.name for f in dataclasses.fields(RunSettings)}
-        unsupported = {k: v for k, v in params.items() if k not in known}
-        if not params["dynamic"]:
+        """RunSettings from :meth:`run_parameters`; whatever srdda cannot honour is warned about."""
+        if not self.dynamic:
             warnings.warn(f"{self.source}: static analysis (velocities reset every step) is not supported; "
                           "converted as a dynamic run", stacklevel=2)
-        for flag in ("auto_time_step", "auto_penalty"):
-            if unsupported.get(flag):
-                warnings.warn(f"{self.source}: {flag} is not supported; the fixed time step / penalty "
-                              "of the file is used", stacklevel=2)
-        for name in ("max_displacement_ratio", "open_close_limit"):
-            if name in unsupported and unsupported[name] is not None:
-                warnings.warn(f"{self.source}: {name} = {unsupported[name]} is not used by srdda's RunSettings "
-                              "yet (contact settings)", stacklevel=2)
+        if self.auto_time_step:
+            warnings.warn(f"{self.source}: automatic time step is not supported; the file's maximum time step "
+                          f"{self.max_time_step:g} is the time step", stacklevel=2)
+        if self.auto_penalty:
+            warnings.warn(f"{self.source}: automatic penalty is not supported; the penalty is fixed at "
+                          f"{self.penalty_factor:g} x the largest Young's modulus", stacklevel=2)
+        params = self.run_parameters()
+        known = {f.name for f in dataclasses.fields(RunSettings)}
+        unused = {k: v for k, v in params.items() if k not in known}
+        if unused:
+            warnings.warn(f"{self.source}: contact settings not in this srdda's RunSettings (ignored): "
+                          + ", ".join(f"{k}={v:g}" for k, v in unused.items()), stacklevel=2)
         try:
             return RunSettings(**{k: v for k, v in params.items() if k in known})
         except ValueError as exc:
