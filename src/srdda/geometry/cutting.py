@@ -13,10 +13,9 @@ Steps (details and choices in ``docs/cutting.md``):
 1. free joint ends (touching no other segment) are extended by the edge-node
    distance ``d``, so a joint stopping short of another by less than ``d``
    meets it (Shi's tolerance); overshoots become dangles;
-2. node the linework; merge nodes closer than ``d`` (the surviving node of a
-   cluster is a boundary vertex, else a node on the boundary, else an input
-   end point, so the domain keeps its shape); re-node if the merge changed
-   the graph;
+2. node the linework; merge nodes closer than ``d`` and split edges passing
+   closer than ``d`` to a node (boundary vertices and nodes never move, so
+   the domain keeps its shape); re-node and repeat while anything changed;
 3. polygonize; dangling edges drop out; a face with holes (an opening no
    joint reaches) is split by a horizontal cut through each hole;
 4. drop faces outside the boundary, inside openings, or holding hole points;
@@ -29,7 +28,7 @@ Steps (details and choices in ``docs/cutting.md``):
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,7 +37,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-__all__ = ["BlockCut", "CuttingError", "cut_blocks"]
+__all__ = ["NO_JOINT", "BlockCut", "CuttingError", "cut_blocks"]
+
+NodeFunction = Callable[[np.ndarray], np.ndarray]
 
 NO_JOINT = -1  # edge label of edges lying on no input segment (hole splits)
 _JUNCTION_ULPS = 4.0  # a T-junction vertex this many ulps off its chord is rounding, hence collinear
@@ -219,8 +220,8 @@ def _explode_edges(geom: shapely.Geometry) -> np.ndarray:
     return edges[np.any(edges[:, 0] != edges[:, 1], axis=1)]
 
 
-def _merge_close_nodes(edges: np.ndarray, distance: float, rank_of: callable,
-                       ring_edge_of: callable) -> tuple[np.ndarray, bool]:
+def _merge_close_nodes(edges: np.ndarray, distance: float, rank_of: NodeFunction,
+                       ring_edge_of: NodeFunction) -> tuple[np.ndarray, bool]:
     """Merge every cluster of nodes closer than ``distance`` (chained) into its highest-ranked node.
 
     Ranks: 3 boundary vertex, 2 node on the boundary, 1 input end point, 0 other.
@@ -273,8 +274,8 @@ def _merge_close_nodes(edges: np.ndarray, distance: float, rank_of: callable,
     return moved, True
 
 
-def _snap_nodes_to_edges(edges: np.ndarray, distance: float, fixed_edge: callable,
-                         rank_of: callable) -> tuple[np.ndarray, bool]:
+def _snap_nodes_to_edges(edges: np.ndarray, distance: float, fixed_edge: NodeFunction,
+                         rank_of: NodeFunction) -> tuple[np.ndarray, bool]:
     """Split every edge passing closer than ``distance`` to a node not its own at that node.
 
     A node near a boundary edge (``fixed_edge`` true) moves onto the edge (its
@@ -380,7 +381,7 @@ def cut_blocks(
     long_enough = lengths > edge_node_distance  # shorter joints would collapse into one node
     segs, types = segs[long_enough & (lengths > 0)], types[long_enough & (lengths > 0)]
 
-    ring_segs, ring_types, ring_vertices = [np.zeros((0, 4))], [np.zeros(0, dtype=np.int64)], [np.zeros((0, 2))]
+    ring_segs, ring_types = [np.zeros((0, 4))], [np.zeros(0, dtype=np.int64)]
     domain = None
     if boundary is not None:
         domain = _as_polygon(boundary, "boundary")
