@@ -221,3 +221,12 @@ def test_add_cut_blocks_maps_materials_joints_and_fixed():
     assert np.sum(arrays.edge_joint == -1) == 6
     with pytest.raises(srdda.ModelError, match="material label"):
         srdda.add_cut_blocks(srdda.Model(), cut, materials={0: "a"})
+
+
+def test_tolerance_larger_than_a_boundary_gap_is_warned():
+    opening = [(0.1, 0.005), (0.9, 0.005), (0.9, 0.9), (0.1, 0.9)]  # 5 mm above the bottom edge
+    with pytest.warns(UserWarning, match="exceeds the gap between boundary features"):
+        cut_blocks([(0.5, 0, 0.5, 1)], edge_node_distance=0.01, boundary=SQUARE, openings=[opening])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cut_blocks([(0.5, 0, 0.5, 1)], edge_node_distance=0.001, boundary=SQUARE, openings=[opening])

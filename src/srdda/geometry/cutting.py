@@ -327,6 +327,21 @@ def _snap_nodes_to_edges(edges: np.ndarray, distance: float, fixed_edge: NodeFun
     return out[np.any(out[:, 0] != out[:, 1], axis=1)], True
 
 
+def _warn_tight_boundary(ring_segs: np.ndarray, distance: float) -> None:
+    """Warn when a boundary/opening vertex lies within ``distance`` of a boundary edge not its own."""
+    if distance <= 0 or len(ring_segs) == 0:
+        return
+    verts = np.unique(ring_segs[:, :2], axis=0)
+    lines = shapely.linestrings(ring_segs.reshape(-1, 2, 2))
+    iv, ie = shapely.STRtree(lines).query(shapely.points(verts), predicate="dwithin", distance=distance)
+    own = np.all(ring_segs[ie, :2] == verts[iv], axis=1) | np.all(ring_segs[ie, 2:] == verts[iv], axis=1)
+    close = iv[~own]
+    if len(close):
+        x, y = verts[close[0]]
+        warnings.warn(f"edge_node_distance {distance:g} exceeds the gap between boundary features near "
+                      f"({x:g}, {y:g}); nodes there may merge and move the boundary", stacklevel=3)
+
+
 def _split_holes(poly: shapely.Polygon) -> list[shapely.Polygon]:
     """Split a polygon with holes by horizontal cuts through its holes until none is left."""
     todo, done = [poly], []
@@ -411,6 +426,7 @@ def cut_blocks(
             rank = np.where(_rows_in(nodes, ring_vertices), 3, rank)
         return rank
 
+    _warn_tight_boundary(ring_all, d)
     extended = np.vstack([ring_all, _extend_free_ends(segs, ring_all, d)])
     edges = _explode_edges(shapely.unary_union(shapely.linestrings(extended.reshape(-1, 2, 2))))
     ring_tree = shapely.STRtree(shapely.linestrings(ring_all.reshape(-1, 2, 2))) if len(ring_all) else None
