@@ -274,3 +274,21 @@ def test_generated_joint_sets_tile_a_slope_with_a_tunnel(dips, spacing, trace, b
         warnings.simplefilter("ignore")
         cut = cut_blocks(segs, types, edge_node_distance=0.01, boundary=slope, openings=[tunnel])
     _check_tiling(cut, rock.area, rock)
+
+
+def test_joint_set_and_opening_inputs_are_checked():
+    from srdda.geometry.jointsets import polygonal_opening
+
+    with pytest.raises(CuttingError, match="spacing"):
+        JointSet(dip=10.0, spacing=0.0)
+    with pytest.raises(CuttingError, match="trace_length"):
+        JointSet(dip=10.0, spacing=1.0, trace_length=-1.0)
+    with pytest.raises(CuttingError, match="radius"):
+        circular_opening((0, 0), 0.0)
+    with pytest.raises(CuttingError, match="not simple"):
+        polygonal_opening([(0, 0), (1, 1), (1, 0), (0, 1)])
+    hexagon = circular_opening((1.0, 2.0), 2.0, 6)
+    np.testing.assert_allclose(np.hypot(hexagon[:, 0] - 1.0, hexagon[:, 1] - 2.0), 2.0, rtol=1e-15)
+    # a vertical set (dip 90°) 1 m apart across a 5 m wide box: x = 0.5, 1.5, ..., 4.5
+    segs, _ = joint_traces([(0, 0), (5, 0), (5, 2), (0, 2)], [JointSet(dip=90.0, spacing=1.0, origin=(0.5, 0))])
+    np.testing.assert_allclose(np.sort(segs[:, 0]), np.arange(5) + 0.5, atol=1e-12)
