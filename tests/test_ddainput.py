@@ -132,3 +132,26 @@ def test_cutting_example_model_files_load(name, blocks):
     arrays = model.arrays()
     assert arrays.block_fixed.any() and not arrays.block_fixed.all()
     assert (arrays.edge_joint > 0).any()  # the joint sets' materials reached the block edges
+
+
+@pytest.mark.parametrize("method", ["dda0", "dda1", "srdda"])
+def test_converted_free_block_moves_as_a_free_body(method):
+    """Reader -> model -> run: mass (unit mass x area), gravity (unit weight / unit mass) and the
+    load table all enter. A force (360, 180) N at the centroid of a 2 x 1 block of unit mass 18
+    (m = 36 kg) under g = 176.58 / 18 = 9.81: the centroid moves by a t²/2 with a = (10, 5 - 9.81).
+    The schemes integrate a constant acceleration exactly, so only rounding is left (1e-9)."""
+    import dataclasses
+
+    from srdda import run
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        data = read_ddaml(DATA / "free_block.geo", DATA / "free_block.ana")
+        model = data.to_model()
+        settings = dataclasses.replace(data.run_settings(), method=method)
+    result = run(model, settings)
+    assert result.completed
+    t = result.array("time")[-1]
+    moved = result.array("measured_position")[-1, 0] - result.array("measured_position")[0, 0]
+    np.testing.assert_allclose(moved, 0.5 * np.array([10.0, 5.0 - 9.81]) * t * t, rtol=1e-9)
+    assert t == pytest.approx(1.0, rel=1e-12)
