@@ -155,3 +155,13 @@ def test_converted_free_block_moves_as_a_free_body(method):
     moved = result.array("measured_position")[-1, 0] - result.array("measured_position")[0, 0]
     np.testing.assert_allclose(moved, 0.5 * np.array([10.0, 5.0 - 9.81]) * t * t, rtol=1e-9)
     assert t == pytest.approx(1.0, rel=1e-12)
+
+
+def test_ddaml_prefix_without_namespace_declaration_is_read(tmp_path):
+    geo = tmp_path / "noxmlns.geo"
+    text = (DATA / "tiny_ddaml.geo").read_text().replace(' xmlns:Berkeley="http://www.tsoft.com/~bdoolin/dda"', "")
+    geo.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        data = read_ddaml(geo, DATA / "tiny_ddaml.ana")
+    assert data.edge_node_ratio == 0.01 and len(data.joints) == 7

@@ -7,6 +7,7 @@ Elements srdda does not support are warned about by name.
 """
 from __future__ import annotations
 
+import re
 import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -22,11 +23,25 @@ def _local(tag: str) -> str:
     return tag.rsplit("}", 1)[-1].split(":")[-1]
 
 
-def _root(path: Path, section: str) -> ET.Element:
+def _parse(path: Path) -> ET.Element:
+    """The XML root; element prefixes without a namespace declaration (``Berkeley:`` alone) are dropped."""
     try:
-        root = ET.parse(path).getroot()
-    except (OSError, ET.ParseError) as exc:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise DDAInputError(f"{path}: cannot read ({exc.strerror})") from None
+    try:
+        return ET.fromstring(text)
+    except ET.ParseError as exc:
+        if "unbound prefix" not in str(exc):
+            raise DDAInputError(f"{path}: not a readable DDAML file ({exc})") from None
+    try:
+        return ET.fromstring(re.sub(r"<(/?)[A-Za-z_][\w.-]*:", r"<\1", text))
+    except ET.ParseError as exc:
         raise DDAInputError(f"{path}: not a readable DDAML file ({exc})") from None
+
+
+def _root(path: Path, section: str) -> ET.Element:
+    root = _parse(path)
     for el in root.iter():
         if _local(el.tag) == section:
             return el
