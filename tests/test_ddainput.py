@@ -165,3 +165,33 @@ def test_ddaml_prefix_without_namespace_declaration_is_read(tmp_path):
         warnings.simplefilter("ignore")
         data = read_ddaml(geo, DATA / "tiny_ddaml.ana")
     assert data.edge_node_ratio == 0.01 and len(data.joints) == 7
+
+
+def _run_all_methods(data):
+    import dataclasses
+
+    from srdda import run
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = data.to_model()
+        settings = data.run_settings()
+    for method in ("dda0", "dda1", "srdda"):
+        result = run(model, dataclasses.replace(settings, method=method))
+        assert result.completed, (method, result.status)
+        assert np.all(np.isfinite(result.array("centroid")))
+
+
+def test_converted_samples_run_under_the_three_methods():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _run_all_methods(read_legacy(DATA / "tiny.geo", DATA / "tiny.ana"))
+        _run_all_methods(read_ddaml(DATA / "tiny_ddaml.geo", DATA / "tiny_ddaml.ana"))
+
+
+@pytest.mark.skipif(not SHARED.exists(), reason="extra check on the project's shared samples (not in a user's clone)")
+@pytest.mark.parametrize("geo", ["legacy/circleslope.geo", "ddaml/pushblock.geo"])
+def test_shared_circleslope_and_pushblock_run_under_the_three_methods(geo):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _run_all_methods(read_dda(SHARED / "dda-inputs" / geo))
