@@ -163,3 +163,20 @@ def test_shallow_penetration_is_a_contact_deep_is_not():
     assert ((1.0, 0.99), (2.0, 1.0), VERTEX_EDGE) in _detect(shallow)
     deep = _model([[0, 0], [2, 0], [2, 1], [0, 1]], [[1.0, 0.97], [1.3, 1.5], [0.7, 1.5]])
     assert not any(f[0] == (1.0, 0.97) for f in _detect(deep))
+
+
+@pytest.mark.parametrize("method", ["dda0", "dda1", "srdda"])
+def test_blocks_with_coincident_corners_rest_on_each_other(method):
+    # Cut blocks share whole edges with identical end vertices. The corners of the
+    # upper block then sit exactly on the lower block's corners, a degenerate
+    # vertex-vertex case: the block must rest, not fall through (free fall would
+    # be 0.45 m in 0.3 s). Bound: settlement mg/(2k) plus elastic shortening,
+    # about 8e-6 m, so 2e-5 m.
+    m = srdda.Model(gravity=(0.0, -10.0))
+    m.add_material("r", srdda.Material(2500.0, 1e9, 0.25))
+    m.add_block([[0, -1], [1, -1], [1, 0], [0, 0]], "r", fixed=True)
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "r")
+    r = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=300, method=method, penalty=1e10))
+    assert r.completed
+    assert abs(r.array("centroid")[-1, 1, 1] - 0.5) < 2e-5
+    assert r.closed_contacts[-1] == 2

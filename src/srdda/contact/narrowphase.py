@@ -22,8 +22,9 @@ the signed distance n·(v - p0) is positive outside.
   pass the angle criterion, else the one that passes.
 
 * **Plausibility**: a vertex behind the edge's line (negative gap) counts
-  only if it lies inside the other block and no deeper than the allowed
-  penetration (a vertex on the far side of a thin block is not a contact).
+  only if it lies inside the other block, no deeper than the allowed
+  penetration, and no closer to a non-adjacent edge of that block (a vertex
+  on the far side of a thin block is not a contact).
 
 Output: contact vertex, contacted edge (index of its start vertex) and kind
 (0 vertex-edge, 1 vertex-vertex).
@@ -82,12 +83,18 @@ def _projection(X, nxt, v, e):
 def _entrance_edge(X, nxt, prv, v, q, sin_tol):
     """The entrance line of vertex v at vertex q (edge start index), or -1.
 
-    -1 when v is not in q's vertex region (it projects into the interior of an
-    edge at q: a vertex-edge contact covers it) or neither edge passes the
-    angle criterion.
+    -1 when a vertex-edge contact covers v (it projects into the interior of
+    an edge at q whose angle criterion it passes) or neither edge passes the
+    angle criterion. Projecting into an edge that v's wedge cannot touch does
+    not count: two blocks whose corners coincide (cut blocks, stacked blocks)
+    must still make a contact there.
     """
-    if _projection(X, nxt, v, q) > 0.0 or _projection(X, nxt, v, prv[q]) < 1.0:
-        return -1
+    for e in (prv[q], q):
+        t = _projection(X, nxt, v, e)
+        if 0.0 < t < 1.0:
+            x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
+            if _wedge_fits(X, nxt, prv, v, dy / length, -dx / length, sin_tol):
+                return -1
     best = -1
     best_dist = -np.inf
     for e in (prv[q], q):
@@ -142,7 +149,10 @@ def _plausible(X, block_ptr, nxt, b, v, e, max_depth):
         return False
     slack = 1e-9 * length  # rounding of distances near a vertex shared by two edges
     for f in range(block_ptr[b], block_ptr[b + 1]):
-        if f != e and _segment_distance(X, nxt, f, x, y) < depth - slack:
+        # the edges next to e meet it at a corner: near that corner v is close to them too
+        if f == e or nxt[f] == e or f == nxt[e]:
+            continue
+        if _segment_distance(X, nxt, f, x, y) < depth - slack:
             return False
     return True
 
