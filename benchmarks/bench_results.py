@@ -21,16 +21,11 @@ import srdda
 from srdda.io.results_store import ResultsStore, read_results
 from srdda.io.vtk import write_vtu_series
 
+from bench_core import chain_model as core_chain_model
+
 
 def chain_model(n: int) -> srdda.Model:
-    m = srdda.Model(gravity=(0.0, -10.0))
-    m.add_material("rock", srdda.Material(2500.0, 1e10, 0.25))
-    for i in range(n):
-        m.add_block([[i, -0.1], [i + 1, -0.1], [i + 1, 0.1], [i, 0.1]], "rock")
-        if i:
-            for y in (-0.1, 0.1):
-                m.add_point_spring([i, y], [i, y], 1e9, block_a=i - 1, block_b=i)
-    m.add_fixed_point([0.0, 0.0], block=0, stiffness=1e10)
+    m = core_chain_model(n)
     m.add_measured_point([n, 0.0], block=n - 1)
     return m
 

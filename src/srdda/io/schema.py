@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
 
 from .units import to_si
 
@@ -27,6 +27,15 @@ Density = Annotated[float, _unit("density")]
 Time = Annotated[float, _unit("time")]
 Angle = Annotated[float, _unit("angle")]
 Point = tuple[float, float]
+
+
+def _strictly_increasing(rows: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+    if any(b[0] <= a[0] for a, b in zip(rows, rows[1:])):
+        raise ValueError("table times must increase strictly")
+    return rows
+
+
+Table = Annotated[list[tuple[Time, float, float]], AfterValidator(_strictly_increasing)]  # rows [t, x, y]
 
 
 class _Strict(BaseModel):
@@ -104,14 +113,7 @@ class FixedPointSection(PointRef):
 
 class PointLoadSection(PointRef):
     force: Point | None = None
-    table: list[tuple[Time, float, float]] | None = None
-
-    @field_validator("table")
-    @classmethod
-    def _increasing(cls, v: list[tuple[float, float, float]] | None) -> list[tuple[float, float, float]] | None:
-        if v is not None and any(b[0] <= a[0] for a, b in zip(v, v[1:])):
-            raise ValueError("table times must increase strictly")
-        return v
+    table: Table | None = None
 
 
 class PointSpringSection(_Strict):
@@ -161,17 +163,10 @@ class HistorySection(_Strict):
     """A time history: exactly one of constant [x, y], table [[t, x, y], ...], or sine (amplitude, period)."""
 
     constant: Point | None = None
-    table: list[tuple[Time, float, float]] | None = None
+    table: Table | None = None
     amplitude: Point | None = None
     period: Time | None = Field(None, gt=0)
     phase: float = 0.0  # rad
-
-    @field_validator("table")
-    @classmethod
-    def _increasing(cls, v: list[tuple[float, float, float]] | None) -> list[tuple[float, float, float]] | None:
-        if v is not None and any(b[0] <= a[0] for a, b in zip(v, v[1:])):
-            raise ValueError("table times must increase strictly")
-        return v
 
 
 class PrescribedMotionSection(PointRef):
