@@ -149,9 +149,17 @@ def fig_configuration(arrays: Any, title: str = "", labels: Sequence[str] | None
         for k, p in enumerate(pts[mr]):
             ax.annotate(labels[k] if labels else f"P{k}", p, xytext=(4, 4), textcoords="offset points",
                         color="tab:red", fontsize=8)
-    ax.set(xlabel="x (m)", ylabel="y (m)", title=title)
+    ax.set(xlabel="x (m)", ylabel="y (m)", title=title, aspect="equal")
+    # slender models (a 10 m rod 0.1 m thick) get a readable height: at least 1/6 of the width
+    lo, hi = arrays.vertices.min(axis=0), arrays.vertices.max(axis=0)
+    width, height = hi - lo
+    pad = 0.05 * max(width, height)
+    half = max(height, width / 6.0) / 2 + pad
+    mid = 0.5 * (lo[1] + hi[1])
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(mid - half, mid + half)
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize="small", loc="best")
+        fig.legend(fontsize="small", loc="outside lower center", ncols=4)
     return fig
 
 
