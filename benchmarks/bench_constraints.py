@@ -79,8 +79,8 @@ def best_of(fn, repeat: int = 5) -> float:
 
 def per_step(model: srdda.Model, method: str, steps: int) -> float:
     arrays = model.arrays()
-    settings = srdda.RunSettings(dt=1e-3, n_steps=steps, method=method, record_every=steps)
-    srdda.run(arrays, srdda.RunSettings(dt=1e-3, n_steps=1, method=method))
+    settings = srdda.RunSettings(dt=1e-3, n_steps=steps, method=method, record_every=steps, contacts=False)
+    srdda.run(arrays, srdda.RunSettings(dt=1e-3, n_steps=1, method=method, contacts=False))
     t0 = time.perf_counter()
     res = srdda.run(arrays, settings)
     assert res.completed, res.status

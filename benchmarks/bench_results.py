@@ -50,7 +50,7 @@ def main() -> None:
         path = Path(tmp) / "bench.h5"
         for n in args.blocks:
             arrays = chain_model(n).arrays()
-            settings = srdda.RunSettings(dt=1e-3, n_steps=args.steps, method="srdda")
+            settings = srdda.RunSettings(dt=1e-3, n_steps=args.steps, method="srdda", contacts=False)
             plain = best_of_two(lambda: srdda.run(arrays, settings))
             for flush in (10, 100):
                 stored = best_of_two(lambda: srdda.run(
