@@ -180,3 +180,21 @@ def test_blocks_with_coincident_corners_rest_on_each_other(method):
     assert r.completed
     assert abs(r.array("centroid")[-1, 1, 1] - 0.5) < 2e-5
     assert r.closed_contacts[-1] == 2
+
+
+def test_vertex_beside_an_acute_corner_is_not_a_contact_with_its_other_edge():
+    # The jointed-slope explosion: a block's corner sits on the top edge of another block
+    # 0.01 m from that block's acute (78°) corner, barely penetrating (1e-5 m). It also
+    # projects into the corner's other (right) edge and lies 0.01 m behind that edge's line,
+    # well within 0.4 d0 = 0.02 m, and its wedge fits that edge (the upper block's left side
+    # is parallel to it). The right edge is not its shortest way out (the top edge is 1e-5 m
+    # away): only the top-edge contact is real; the other would be a 0.01 m deep spring
+    # created from nothing. The same holds the other way round for the acute corner itself.
+    t12 = np.tan(np.radians(12.0))
+    lower = [[-1, -1], [-t12, -1], [0, 0], [-1, 0]]
+    v = (-0.01, -1e-5)
+    upper = [list(v), [1.2, -1e-5], [1.2 + 0.4 * t12, 0.4], [v[0] + 0.4 * t12, 0.4]]
+    found = _detect(_model(lower, upper))
+    assert {f for f in found if f[0] == v} == {(v, (0.0, 0.0), VERTEX_EDGE)}  # top edge (0,0)->(-1,0)
+    corner = {f for f in found if f[0] == (0.0, 0.0)}
+    assert corner == {((0.0, 0.0), v, VERTEX_EDGE)}  # the upper block's bottom edge only

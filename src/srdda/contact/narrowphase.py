@@ -23,8 +23,9 @@ the signed distance n·(v - p0) is positive outside.
 
 * **Plausibility**: a vertex behind the edge's line (negative gap) counts
   only if it lies inside the other block, no deeper than the allowed
-  penetration, and no closer to a non-adjacent edge of that block (a vertex
-  on the far side of a thin block is not a contact).
+  penetration, and no closer to another edge of that block that its wedge
+  could have entered through (a vertex on the far side of a thin block, or
+  on one edge beside an acute corner, is not a contact with that edge).
 
 Output: contact vertex, contacted edge (index of its start vertex) and kind
 (0 vertex-edge, 1 vertex-vertex).
@@ -132,12 +133,19 @@ def _segment_distance(X, nxt, e, x, y):
 
 
 @njit(cache=True)
-def _plausible(X, block_ptr, nxt, b, v, e, max_depth):
+def _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
     """A vertex behind the edge line is a contact only as a real, shallow penetration.
 
     It must lie inside block b, no deeper than ``max_depth``, and the edge must
-    be the nearest part of b's boundary (its shortest way out); a vertex on
-    the far side of a thin block, or on b's boundary elsewhere, is not.
+    be its shortest way out: no other edge of b that v's wedge could have
+    entered through (angle criterion) may be nearer. A vertex on the far side
+    of a thin block is not a contact, nor is a vertex that sits on one edge near
+    an acute corner of b and merely lies behind the line of the corner's other
+    edge (it would get a spring as deep as its distance to that line, a
+    penetration that never happened: the energy of that spring is created from
+    nothing). Edges v's wedge cannot touch do not compete: two blocks whose
+    corners coincide (cut or stacked blocks) keep their contact although v is
+    as near the other block's side edge as to the supporting one.
     """
     x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
     x = X[v, 0]
@@ -149,10 +157,10 @@ def _plausible(X, block_ptr, nxt, b, v, e, max_depth):
         return False
     slack = 1e-9 * length  # rounding of distances near a vertex shared by two edges
     for f in range(block_ptr[b], block_ptr[b + 1]):
-        # the edges next to e meet it at a corner: near that corner v is close to them too
-        if f == e or nxt[f] == e or f == nxt[e]:
+        if f == e or _segment_distance(X, nxt, f, x, y) >= depth - slack:
             continue
-        if _segment_distance(X, nxt, f, x, y) < depth - slack:
+        fx0, fy0, fdx, fdy, flength = _edge_frame(X, nxt, f)
+        if _wedge_fits(X, nxt, prv, v, fdy / flength, -fdx / flength, sin_tol):
             return False
     return True
 
@@ -194,7 +202,7 @@ def detect_contacts(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_
                     if (x - x0) ** 2 + (y - y0) ** 2 < d02:  # vertex-vertex with q = e
                         chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
                         if chosen >= 0 and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
-                                and _plausible(X, block_ptr, nxt, b, v, chosen, max_depth):
+                                and _plausible(X, block_ptr, nxt, prv, b, v, chosen, max_depth, sin_tol):
                             buf = _push(buf, n, v, chosen, VERTEX_VERTEX)
                             n += 1
                     t = ((x - x0) * dx + (y - y0) * dy) / (length * length)
@@ -204,7 +212,7 @@ def detect_contacts(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_
                     ny = -dx / length
                     dist = nx * (x - x0) + ny * (y - y0)
                     if abs(dist) < d0 and _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol) \
-                            and _plausible(X, block_ptr, nxt, b, v, e, max_depth):
+                            and _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
                         buf = _push(buf, n, v, e, VERTEX_EDGE)
                         n += 1
     return buf[:n].copy()
