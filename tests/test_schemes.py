@@ -59,3 +59,17 @@ def test_rho_below_one_damps_high_frequencies_only():
     x_hi, _ = _oscillator("paper", 0.5, 40, 10.0)
     x_one, _ = _oscillator("paper", 1.0, 40, 10.0)
     assert np.max(np.abs(x_hi[-5:])) < 1e-3 * np.max(np.abs(x_one[-5:]))
+
+
+def test_velocity_ratio_zero_is_shis_static_analysis():
+    # k01 = 0: every step starts at rest, so a block under a constant force moves by
+    # the quasi-static increment d = F Δt² / (2 m) each step (Shi's scheme with V = 0):
+    # after n steps n·g·Δt²/2, not the dynamic g (nΔt)²/2.
+    m = srdda.Model(gravity=(0.0, -10.0))
+    m.add_material("m", srdda.Material(density=1000.0, young=1e9, poisson=0.2))
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "m")
+    for method in ("dda0", "srdda"):
+        r = srdda.run(m, srdda.RunSettings(dt=0.01, n_steps=50, method=method, velocity_ratio=0.0))
+        drop = r.array("centroid")[-1, 0, 1] - 0.5
+        assert drop == pytest.approx(-50 * 10.0 * 0.01**2 / 2, rel=1e-12)
+        assert np.all(r.array("velocity")[-1] == 0.0)

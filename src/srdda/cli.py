@@ -88,7 +88,7 @@ def run_command(model: str | None, method: str | None, steps: int | None, out: s
     out_dir.mkdir(parents=True, exist_ok=True)
     store = ResultsStore(out_dir / "results.h5", settings, flush_every=flush_every,
                          model_text=Path(model).read_text(encoding="utf-8"))
-    with tqdm(total=settings.n_steps, disable=quiet, unit="step", desc=settings.method) as bar:
+    with tqdm(total=settings.n_steps, disable=True if quiet else None, unit="step", desc=settings.method) as bar:
         result = run(mdl, settings, progress=lambda _: bar.update(1), recorders=[store])
     path = save_histories(result, out_dir)
     click.echo(f"{result.status}: {len(result.step)} recorded steps written to {path}")
@@ -165,7 +165,8 @@ def paper_command(example: str, method: str, as_json: bool, report_dir: str | No
 
         def progress(m: str, step: int, total: int) -> None:
             if m not in bars:
-                bars[m] = tqdm(total=total, desc=f"{name} {m}", unit="step", disable=quiet or as_json, leave=False)
+                bars[m] = tqdm(total=total, desc=f"{name} {m}", unit="step",
+                               disable=True if quiet or as_json else None, leave=False)
             bars[m].update(1)
 
         try:

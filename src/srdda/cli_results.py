@@ -33,7 +33,8 @@ def resume_run(path: str, quiet: bool = False, flush_every: int | None = None) -
         stored = read_results(path)
         last = int(stored.settings.n_steps)
         done = int(stored.step[-1]) if len(stored.step) else 0
-        with tqdm(total=max(0, last - done), disable=quiet, unit="step", desc=f"resume {stored.method}") as bar:
+        with tqdm(total=max(0, last - done), disable=True if quiet else None, unit="step",
+                  desc=f"resume {stored.method}") as bar:
             result = resume(path, flush_every=flush_every, progress=lambda _: bar.update(1))
     except ResultsFileError as exc:
         raise click.UsageError(str(exc)) from None
@@ -57,7 +58,8 @@ def report_paper(directory: str, names: list[str], methods: list[str], quiet: bo
     def progress(example: str, method: str, step: int, total: int) -> None:
         key = (example, method)
         if key not in bars:
-            bars[key] = tqdm(total=total, desc=f"{example} {method}", unit="step", disable=quiet, leave=False)
+            bars[key] = tqdm(total=total, desc=f"{example} {method}", unit="step",
+                                 disable=True if quiet else None, leave=False)
         bars[key].update(1)
 
     try:

@@ -66,6 +66,9 @@ class RunSettings:
     # point, per metre of lever arm, is about half of it.
     secant_tolerance: float = 1e-13
     secant_max_iterations: int = 8
+    # Shi's dynamic ratio k01: velocities and accelerations are multiplied by it after every
+    # step. 1 = dynamic; 0 = Shi's static analysis (each step starts at rest).
+    velocity_ratio: float = 1.0
     record_every: int = 1
     # contacts and step control (docs/contacts.md); lengths relative to w0 = half the model height
     contacts: bool = True  # detect and resolve block contacts
@@ -92,6 +95,8 @@ class RunSettings:
             raise ValueError("record_every must be >= 1")
         if not self.penalty > 0:
             raise ValueError("penalty must be > 0")
+        if not 0.0 <= self.velocity_ratio <= 1.0:
+            raise ValueError(f"velocity_ratio must lie in [0, 1], got {self.velocity_ratio}")
         for name in ("contact_penalty", "auto_penalty", "min_dt"):
             value = getattr(self, name)
             if value is not None and not value > 0:
@@ -280,7 +285,8 @@ def _point_terms(arrays: ModelArrays, state: State, lever: np.ndarray, theta: np
 
 def advance(arrays: ModelArrays, state: State, method: Method, dt: float, penalty: float,
             solver: LinearSolver, secant_tolerance: float = 1e-13, secant_max_iterations: int = 8,
-            terms: Sequence[StepTerm] = (), term_max_iterations: int = 20) -> tuple[State, int]:
+            terms: Sequence[StepTerm] = (), term_max_iterations: int = 20,
+            velocity_ratio: float = 1.0) -> tuple[State, int]:
     """One time step from ``state``; returns the new state and the number of solves.
 
     The model's hinges, pins, springs, driven points and base acceleration
@@ -340,8 +346,8 @@ def advance(arrays: ModelArrays, state: State, method: Method, dt: float, penalt
         if done or (not contacts_pending and solves >= secant_max_iterations + changes):
             break
 
-    new_v = coeffs.v_d * dd + coeffs.v_v * V + coeffs.v_a * A
-    new_a = coeffs.a_d * dd + coeffs.a_v * V + coeffs.a_a * A
+    new_v = velocity_ratio * (coeffs.v_d * dd + coeffs.v_v * V + coeffs.v_a * A)
+    new_a = velocity_ratio * (coeffs.a_d * dd + coeffs.a_v * V + coeffs.a_a * A)
     owner_v = arrays.vertex_block
     vlever = state.vertices - mom.centroid[owner_v]
     vertices = state.vertices + point_displacement(vlever, dd[owner_v], method.kinematics)
@@ -492,7 +498,7 @@ class StepControl:
         terms: list[StepTerm] = [term] if term is not None else []
         try:
             new, solves = advance(arrays, state, method, dt, s.penalty, solver, s.secant_tolerance,
-                                  s.secant_max_iterations, terms, s.open_close_max_iterations)
+                                  s.secant_max_iterations, terms, s.open_close_max_iterations, s.velocity_ratio)
         except StepRejected as exc:
             raise StepRejected(str(exc), s.step_cut_factor) from exc
         if self.contacts is None:  # g2 exists to keep contacts detectable (d0 = 2.5·g2·w0)

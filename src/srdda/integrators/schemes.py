@@ -11,7 +11,7 @@ generalized velocity and acceleration at time t. After the solve, (V, A) at
 t + Δt follow from Δd.
 
 * ``shi``: Shi's DDA (1988): c_k = c_p = 1, c_m = 2/Δt², m_v = 2/Δt,
-  V(t+Δt) = 2Δd/Δt - V(t) (times Shi's dynamic ratio ``velocity_ratio``).
+  V(t+Δt) = 2Δd/Δt - V(t).
 * ``paper``: the paper's generalized-α (Eqs. 60, 64-69): the elastic term is
   Δt·K·V(t+Δt-αf), inertia M·A(t+Δt-αm), penalties at the end of the step
   (Eq. 61). At ρ∞ = 1 it is identical to ``shi``.
@@ -66,23 +66,19 @@ class TimeScheme:
 
     name: str = "shi"
     rho_inf: float = 1.0
-    velocity_ratio: float = 1.0  # Shi's dynamic ratio (1 = fully dynamic), shi only
 
     def __post_init__(self) -> None:
         if self.name not in SCHEMES:
             raise ValueError(f"time scheme must be one of {SCHEMES}, got {self.name!r}")
         alpha_parameters(self.rho_inf)
-        if not 0.0 <= self.velocity_ratio <= 1.0:
-            raise ValueError("velocity_ratio must lie in [0, 1]")
 
     def coefficients(self, dt: float) -> SchemeCoefficients:
         """The incremental-equation coefficients for time step ``dt``."""
         if self.name == "shi":
-            k = self.velocity_ratio
             return SchemeCoefficients(
                 c_k=1.0, c_p=1.0, c_m=2.0 / dt**2, m_v=2.0 / dt, m_a=0.0, k_v=0.0, k_a=0.0,
                 load_time_fraction=1.0,
-                v_d=2.0 * k / dt, v_v=-k, v_a=0.0,
+                v_d=2.0 / dt, v_v=-1.0, v_a=0.0,
                 a_d=4.0 / dt**2, a_v=-4.0 / dt, a_a=-1.0,
             )
         am, af, beta, gamma = alpha_parameters(self.rho_inf)

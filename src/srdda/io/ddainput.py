@@ -150,6 +150,7 @@ class DDAInput:
             "contact_penalty": self.penalty_factor * young,
             "max_displacement_ratio": self.max_displacement_ratio,
             "record_every": max(1, self.save_interval),
+            "velocity_ratio": 1.0 if self.dynamic else 0.0,  # Shi's static analysis: k01 = 0
         }
         if self.open_close_limit is not None:
             params["open_close_max_iterations"] = self.open_close_limit
@@ -157,9 +158,6 @@ class DDAInput:
 
     def run_settings(self) -> RunSettings:
         """RunSettings from :meth:`run_parameters`; whatever srdda cannot honour is warned about."""
-        if not self.dynamic:
-            warnings.warn(f"{self.source}: static analysis (velocities reset every step) is not supported; "
-                          "converted as a dynamic run", stacklevel=2)
         if self.auto_time_step:
             warnings.warn(f"{self.source}: automatic time step is not supported; the file's maximum time step "
                           f"{self.max_time_step:g} is the time step", stacklevel=2)

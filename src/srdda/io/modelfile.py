@@ -122,7 +122,8 @@ def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
     r = spec.run
     settings = RunSettings(dt=r.dt, n_steps=r.steps, method=r.method, rho_inf=r.rho_inf, scheme=r.scheme,
                            linearization=r.linearization, penalty=r.penalty, solver=r.solver,
-                           record_every=r.record_every, **{k: getattr(r, k) for k in CONTACT_RUN_FIELDS})
+                           record_every=r.record_every, velocity_ratio=r.velocity_ratio,
+                           **{k: getattr(r, k) for k in CONTACT_RUN_FIELDS})
     return model, settings
 
 
@@ -220,7 +221,7 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
     mats = list(model.materials)
     run: dict[str, Any] = {"method": settings.method, "dt": settings.dt, "steps": settings.n_steps,
                            "rho_inf": settings.rho_inf, "penalty": settings.penalty, "solver": settings.solver,
-                           "record_every": settings.record_every}
+                           "record_every": settings.record_every, "velocity_ratio": settings.velocity_ratio}
     defaults = RunSettings(dt=1.0, n_steps=0)
     run.update({k: getattr(settings, k) for k in CONTACT_RUN_FIELDS if getattr(settings, k) != getattr(defaults, k)})
     if settings.scheme is not None:

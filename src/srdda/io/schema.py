@@ -54,6 +54,7 @@ class RunSection(_Strict):
     penalty: Stiffness = Field(1e9, gt=0)
     solver: Literal["auto", "dense", "superlu", "cholmod", "pardiso"] = "auto"
     record_every: int = Field(1, ge=1)
+    velocity_ratio: float = Field(1.0, ge=0, le=1)  # Shi's k01: 0 = static analysis
     # contacts and step control (docs/contacts.md); defaults as in RunSettings
     contacts: bool = True
     contact_penalty: Stiffness | None = Field(None, gt=0)
