@@ -23,7 +23,7 @@ import numpy as np
 
 from .assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
 from .constraints import LEDGER, link_energy, step_terms, step_work
-from .contact.term import ContactModel, ContactParameters, ContactSet, ContactTerm
+from .contact.term import ContactModel, ContactParameters, ContactSet
 from .geometry.polygon import BlockMoments
 from .integrators.methods import Method, method_preset
 from .integrators.schemes import SchemeCoefficients
@@ -234,8 +234,12 @@ class StepTerm(Protocol):
 
     ``add_to`` adds matrices and forces; ``converged`` is asked after each
     solve and may update internal states (e.g. open-close), returning False
-    to request another solve of the same step.
+    to request another solve of the same step. A term whose ``cuts_step`` is
+    True (contacts) has the step cut and repeated when it has not converged
+    within the open-close cap; the others only ask for more solves.
     """
+
+    cuts_step: bool
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None: ...
 
@@ -333,7 +337,7 @@ def advance(arrays: ModelArrays, state: State, method: Method, dt: float, penalt
         solves += 1
         flags = [term.converged(dd, ctx) for term in terms]
         terms_done = all(flags)
-        contacts_pending = any(not ok for term, ok in zip(terms, flags) if isinstance(term, ContactTerm))
+        contacts_pending = any(not ok for term, ok in zip(terms, flags) if term.cuts_step)
         if contacts_pending:
             changes += 1
             if changes >= term_max_iterations:

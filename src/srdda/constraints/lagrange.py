@@ -41,6 +41,8 @@ def prescribed_target(links: ConstraintArrays, initial_points: np.ndarray, t: fl
 class LagrangeTerm:
     """Hinges, pins and multiplier-driven points as constraint rows of each step."""
 
+    cuts_step = False  # linear in the step: converged after one solve
+
     def __init__(self, links: ConstraintArrays) -> None:
         self.links = links
         self.driven = np.flatnonzero(links.prescribed_multiplier)

@@ -52,6 +52,8 @@ def prescribed_penalty_energy(links: ConstraintArrays, initial_points: np.ndarra
 class PrescribedPenaltyTerm:
     """Points driven by penalty springs to their moving targets."""
 
+    cuts_step = False  # linear in the step: converged after one solve
+
     def __init__(self, links: ConstraintArrays) -> None:
         self.links = links
         self.pen = np.flatnonzero(~links.prescribed_multiplier)
@@ -73,6 +75,8 @@ class PrescribedPenaltyTerm:
 
 class BaseAccelerationTerm:
     """Body force -ρ·A·a_g(t) on the translation of every block."""
+
+    cuts_step = False  # linear in the step: converged after one solve
 
     def __init__(self, links: ConstraintArrays) -> None:
         self.history = links.base_acceleration

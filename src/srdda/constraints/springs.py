@@ -51,6 +51,8 @@ def spring_energy(links: ConstraintArrays, points: np.ndarray) -> float:
 class SpringTerm:
     """Adds every spring and dashpot to the step's system."""
 
+    cuts_step = False  # linear in the step: converged after one solve
+
     def __init__(self, links: ConstraintArrays) -> None:
         self.links = links
 

@@ -78,6 +78,8 @@ class ContactSet:
 class ContactTerm:
     """The contacts of one step: springs, friction and the open-close iteration."""
 
+    cuts_step = True  # an open-close that does not settle cuts Δt (simulation.StepControl)
+
     def __init__(self, geometry: ContactGeometry, found: np.ndarray, params: ContactParameters, state: np.ndarray,
                  sign: np.ndarray, reference: np.ndarray, bonded: np.ndarray, normal_force: np.ndarray,
                  joint: np.ndarray, length: np.ndarray) -> None:
