@@ -38,14 +38,20 @@ def best_time(fn, repeat: int) -> tuple[float, object]:
     return best, out
 
 
+SHARED_SLOPES = Path(__file__).resolve().parents[2] / "shared" / "benchmarks" / "slopes"  # beside the repo
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--dir", default="/work/shared/benchmarks/slopes")
+    ap.add_argument("--dir", default=str(SHARED_SLOPES), help="folder of DDAML slope models (*.geo, *.ana)")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--model", action="store_true", help="also time building the Model from the cut")
     ap.add_argument("--synthetic", default="", help="comma-separated joint spacings (m) for generated sets")
     ap.add_argument("--json", help="write the results to this file")
     args = ap.parse_args()
+    if not args.synthetic and not list(Path(args.dir).glob("*.geo")):
+        print(f"no slope models in {args.dir}: timing generated joint sets instead")
+        args.synthetic = "2,1,0.5"
     rows = []
     for spacing in [float(v) for v in args.synthetic.split(",") if v]:
         sets = [JointSet(dip=25.0, spacing=spacing, joint_type=2), JointSet(dip=100.0, spacing=spacing, joint_type=3)]

@@ -4,7 +4,7 @@ Blocks are jittered squares on a grid with a gap of 0.2 % of their size, so
 every block has contacts with its neighbours (the worst case for the narrow
 phase). Prints a table and the fitted growth exponent of the total time.
 
-    PYTHONPATH=src python benchmarks/contact_detection.py [N ...]
+    PYTHONPATH=src python benchmarks/bench_contact_detection.py [N ...]
 """
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ The slope (20 m high, 35° face over a 5 m deep base) is cut by two joint sets
 blocks reaching below y = 1 m are fixed. Joints: φ = 25°, no cohesion, so the blocks near the
 face start to move under gravity.
 
-    PYTHONPATH=src python benchmarks/contact_slope.py [steps] [--profile]
+    PYTHONPATH=src python benchmarks/bench_contact_slope.py [steps] [--profile]
 """
 from __future__ import annotations
 
