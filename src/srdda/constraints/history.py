@@ -13,7 +13,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import quad
 
 __all__ = ["MotionHistory", "HistoryError"]
 
@@ -93,6 +92,8 @@ class MotionHistory:
         if self.amplitude is not None:
             w = 2.0 * np.pi / self.period
             return np.asarray(self.amplitude) * (np.cos(self.phase) - np.cos(w * t + self.phase)) / w
+        from scipy.integrate import quad  # only callables need it: keeps start-up fast
+
         return np.array([quad(lambda s, i=i: self(s)[i], 0.0, t, limit=200)[0] for i in range(2)])
 
     def double_integral(self, t: float) -> np.ndarray:
@@ -114,6 +115,8 @@ class MotionHistory:
             w = 2.0 * np.pi / self.period
             p = self.phase
             return np.asarray(self.amplitude) * (t * np.cos(p) / w - (np.sin(w * t + p) - np.sin(p)) / w**2)
+        from scipy.integrate import quad
+
         return np.array([quad(lambda r, i=i: (t - r) * self(r)[i], 0.0, t, limit=200)[0] for i in range(2)])
 
     def _table_integral(self, t: float) -> np.ndarray:
