@@ -12,6 +12,7 @@ post-adjusted rotations (``dda1``) and SRDDA (``srdda``). SI units throughout.
 True
 """
 from .constraints import MotionHistory, hinge_forces
+from .history import TimeHistory
 from .contact import ContactSet
 from .geometry import PolygonError, block_moments
 from .integrators import METHODS, Method, TimeScheme, method_preset
@@ -27,7 +28,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "METHODS", "ContactSet", "DivergenceError", "JointMaterial", "Load", "Material", "Method", "Model", "ModelError",
-    "MotionHistory", "PolygonError", "hinge_forces",
+    "MotionHistory", "PolygonError", "TimeHistory", "hinge_forces",
     "Result", "RunSettings", "State", "StepRejected", "TimeScheme", "available_solvers", "block_moments",
     "get_solver", "method_preset", "run", "__version__", "ResultsStore", "StoredResult", "read_results", "resume",
     "BlockCut", "CuttingError", "JointSet", "add_cut_blocks", "circular_opening", "cut_blocks", "joint_traces",

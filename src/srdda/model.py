@@ -6,7 +6,7 @@ that the time loop uses. Units are SI: m, kg, s, N, Pa.
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -14,7 +14,7 @@ import numpy as np
 import shapely
 
 from .constraints.data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
-from .constraints.history import HistoryError, MotionHistory
+from .history import HistoryError, MotionHistory, TimeHistory
 from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon
 
 __all__ = ["JointMaterial", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
@@ -72,40 +72,9 @@ def elasticity_matrix(mat: Material) -> np.ndarray:
     return c * np.array([[1 - nu, nu, 0], [nu, 1 - nu, 0], [0, 0, (1 - 2 * nu) / 2]])
 
 
-LoadFunction = Callable[[float], Sequence[float]]
 
 
-@dataclass(frozen=True)
-class Load:
-    """A force (N) as a function of time: constant, a table, or a callable."""
-
-    constant: tuple[float, float] | None = None
-    table: np.ndarray | None = None  # rows (t, fx, fy), linear interpolation, held at the ends
-    function: LoadFunction | None = None
-
-    def __call__(self, t: float) -> np.ndarray:
-        if self.function is not None:
-            return np.asarray(self.function(t), dtype=float)
-        if self.table is not None:
-            tt = self.table[:, 0]
-            return np.array([np.interp(t, tt, self.table[:, 1]), np.interp(t, tt, self.table[:, 2])])
-        return np.asarray(self.constant, dtype=float)
-
-    @staticmethod
-    def of(value: object) -> Load:
-        """A Load from a pair (constant), an (n, 3) table, a callable, or a Load."""
-        if isinstance(value, Load):
-            return value
-        if callable(value):
-            return Load(function=value)
-        arr = np.asarray(value, dtype=float)
-        if arr.shape == (2,):
-            return Load(constant=(float(arr[0]), float(arr[1])))
-        if arr.ndim == 2 and arr.shape[1] == 3 and len(arr) >= 1:
-            if np.any(np.diff(arr[:, 0]) <= 0):
-                raise ModelError("load table times must increase strictly")
-            return Load(table=arr)
-        raise ModelError("a load is [fx, fy], a table of [t, fx, fy] rows, or a callable of t")
+Load = TimeHistory  # a force (N) as a function of time: constant, table, sine or callable of t
 
 
 @dataclass
@@ -271,7 +240,10 @@ class Model:
     def add_point_load(self, point: Sequence[float], force: object, block: int | None = None) -> None:
         """Apply a force (constant [fx, fy], table of [t, fx, fy], or callable of t) at a block point."""
         b, p = self._resolve(point, block, "point load")
-        self.point_loads.append((b, p, Load.of(force)))
+        try:
+            self.point_loads.append((b, p, Load.of(force)))
+        except HistoryError as exc:
+            raise ModelError(f"point load at {tuple(p)}: {exc}") from None
 
     def add_point_spring(self, point_a: Sequence[float], point_b: Sequence[float], stiffness: float,
                          block_a: int | None = None, block_b: int | None = None) -> None:

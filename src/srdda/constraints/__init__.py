@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 from .data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec
 from .energy import LEDGER, hinge_forces, link_energy, step_work
-from .history import HistoryError, MotionHistory
+from ..history import HistoryError, MotionHistory
 from .lagrange import LagrangeTerm
 from .prescribed import BaseAccelerationTerm, PrescribedPenaltyTerm
 from .springs import SpringTerm

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from .history import MotionHistory
+from ..history import MotionHistory
 
 __all__ = ["HingeSpec", "SpringSpec", "PrescribedSpec", "ConstraintArrays", "compile_links", "links_to_flat",
            "links_from_flat"]
@@ -202,16 +202,6 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
     return np.array(pts, dtype=float).reshape(-1, 2), np.array(owners, dtype=np.int64), links
 
 
-def _history_json(h: MotionHistory | None) -> dict | None:
-    if h is None or h.function is not None:
-        return None
-    if h.table is not None:
-        return {"table": np.asarray(h.table).tolist()}
-    if h.amplitude is not None:
-        return {"amplitude": list(h.amplitude), "period": h.period, "phase": h.phase}
-    return {"constant": list(h.constant)}
-
-
 def links_to_flat(links: ConstraintArrays) -> tuple[dict[str, np.ndarray], dict[str, object]]:
     """The links as (arrays by field name, JSON-able histories) for a results file.
 
@@ -219,8 +209,8 @@ def links_to_flat(links: ConstraintArrays) -> tuple[dict[str, np.ndarray], dict[
     """
     arrays = {f.name: getattr(links, f.name) for f in fields(links) if isinstance(getattr(links, f.name), np.ndarray)}
     meta = {"hinge_names": list(links.hinge_names),
-            "sources": [_history_json(h) for h, _ in links.prescribed_sources],
-            "base_acceleration": _history_json(links.base_acceleration),
+            "sources": [h.to_json() for h, _ in links.prescribed_sources],
+            "base_acceleration": (None if links.base_acceleration is None else links.base_acceleration.to_json()),
             "has_base_acceleration": links.base_acceleration is not None}
     return arrays, meta
 
@@ -233,18 +223,10 @@ def links_from_flat(arrays: dict[str, np.ndarray], meta: dict) -> ConstraintArra
                          "which a file cannot hold")
     order = np.asarray(arrays["prescribed_order"], dtype=np.int64)
     source = np.asarray(arrays["prescribed_source"], dtype=np.int64)
-    hists = [_history_from_json(s) for s in sources_json]
+    hists = [MotionHistory.from_json(s) for s in sources_json]
     sources = tuple((hists[i], int(order[np.flatnonzero(source == i)[0]])) for i in range(len(hists)))
     base = meta["base_acceleration"]
     kwargs = {name: np.asarray(value) for name, value in arrays.items()}
     return ConstraintArrays(**kwargs, hinge_names=tuple(meta["hinge_names"]),
                             prescribed_histories=tuple(hists[i] for i in source), prescribed_sources=sources,
-                            base_acceleration=None if base is None else _history_from_json(base))
-
-
-def _history_from_json(s: dict) -> MotionHistory:
-    if "amplitude" in s:
-        return MotionHistory.sine(s["amplitude"], s["period"], s["phase"])
-    if "table" in s:
-        return MotionHistory(table=np.asarray(s["table"], dtype=float))
-    return MotionHistory(constant=(float(s["constant"][0]), float(s["constant"][1])))
+                            base_acceleration=None if base is None else MotionHistory.from_json(base))

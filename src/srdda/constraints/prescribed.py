@@ -2,7 +2,7 @@
 
 Prescribed motion: a point follows x_target(t) = x(0) + u(t) in its
 prescribed components, u a displacement history or the time integral of a
-velocity history (:class:`~srdda.constraints.history.MotionHistory`).
+velocity history (:class:`~srdda.history.TimeHistory`).
 ``by="multiplier"`` makes it exact through constraint rows
 (:mod:`srdda.constraints.lagrange`); ``by="penalty"`` ties it to the moving
 target by a spring of stiffness p in the prescribed components only (the

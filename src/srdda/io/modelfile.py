@@ -15,7 +15,7 @@ import numpy as np
 import tomli_w
 from pydantic import ValidationError
 
-from ..constraints.history import HistoryError, MotionHistory
+from ..history import HistoryError, MotionHistory
 from ..geometry.polygon import PolygonError
 from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..simulation import RunSettings

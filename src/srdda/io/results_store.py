@@ -130,14 +130,6 @@ def _group_length(group: h5py.Group, names: Sequence[str] | None = None) -> int:
     return min((group[k].shape[0] for k in keys), default=0)
 
 
-def _load_to_json(load: Load) -> dict | None:
-    if load.function is not None:
-        return None
-    if load.table is not None:
-        return {"table": np.asarray(load.table).tolist()}
-    return {"constant": list(load.constant)}
-
-
 def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None) -> None:
     """Every array field of ``arrays`` as a dataset; names, loads and the model text as attributes."""
     for f in dataclasses.fields(arrays):
@@ -149,7 +141,7 @@ def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None)
         group.create_dataset(f"links.{name}", data=value)
     group.attrs["links"] = json.dumps(links_meta)
     group.attrs["block_names"] = json.dumps(list(arrays.block_names))
-    group.attrs["loads"] = json.dumps([_load_to_json(ld) for ld in arrays.loads])
+    group.attrs["loads"] = json.dumps([ld.to_json() for ld in arrays.loads])
     if model_text is not None:
         group.attrs["model_text"] = model_text
 
@@ -167,8 +159,7 @@ def model_arrays_from_file(path: str | Path) -> ModelArrays:
             if f_.name == "block_names":
                 kwargs[f_.name] = tuple(json.loads(g.attrs["block_names"]))
             elif f_.name == "loads":
-                kwargs[f_.name] = tuple(Load(constant=tuple(ld["constant"])) if "constant" in ld
-                                        else Load(table=np.asarray(ld["table"], dtype=float)) for ld in loads_json)
+                kwargs[f_.name] = tuple(Load.from_json(ld) for ld in loads_json)
             elif f_.name == "links" and "links" in g.attrs:
                 try:
                     kwargs["links"] = links_from_flat({k[6:]: g[k][()] for k in g if k.startswith("links.")},

@@ -1,6 +1,6 @@
-"""Time histories of prescribed motion and base acceleration: constant, table, sine or callable.
+"""Time histories (point loads, prescribed motion, base acceleration): constant, table, sine or callable.
 
-A :class:`MotionHistory` gives a 2-vector as a function of time t (s), its
+A :class:`TimeHistory` gives a 2-vector as a function of time t (s), its
 time integral from 0 to t and its double integral ∫₀ᵗ∫₀ˢ = ∫₀ᵗ (t - r)·value(r) dr,
 so a velocity or acceleration history becomes a displacement history without
 any state (starting from rest): exact for constant, table (piecewise linear:
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MotionHistory", "HistoryError"]
+__all__ = ["TimeHistory", "MotionHistory", "HistoryError"]
 
 
 class HistoryError(ValueError):
@@ -22,7 +22,7 @@ class HistoryError(ValueError):
 
 
 @dataclass(frozen=True)
-class MotionHistory:
+class TimeHistory:
     """A vector (x, y) as a function of time.
 
     Exactly one of: ``constant`` (x, y); ``table`` rows (t, x, y) with strictly
@@ -55,22 +55,22 @@ class MotionHistory:
             raise HistoryError("a sine history needs a period > 0 (s)")
 
     @staticmethod
-    def sine(amplitude: Sequence[float], period: float, phase: float = 0.0) -> MotionHistory:
-        return MotionHistory(amplitude=(float(amplitude[0]), float(amplitude[1])), period=float(period),
+    def sine(amplitude: Sequence[float], period: float, phase: float = 0.0) -> TimeHistory:
+        return TimeHistory(amplitude=(float(amplitude[0]), float(amplitude[1])), period=float(period),
                              phase=float(phase))
 
     @staticmethod
-    def of(value: object) -> MotionHistory:
-        """A history from a pair (constant), an (n, 3) table, a callable, or a MotionHistory."""
-        if isinstance(value, MotionHistory):
+    def of(value: object) -> TimeHistory:
+        """A history from a pair (constant), an (n, 3) table, a callable, or a TimeHistory."""
+        if isinstance(value, TimeHistory):
             return value
         if callable(value):
-            return MotionHistory(function=value)
+            return TimeHistory(function=value)
         arr = np.asarray(value, dtype=float)
         if arr.shape == (2,):
-            return MotionHistory(constant=(float(arr[0]), float(arr[1])))
+            return TimeHistory(constant=(float(arr[0]), float(arr[1])))
         if arr.ndim == 2 and arr.shape[1] == 3:
-            return MotionHistory(table=arr)
+            return TimeHistory(table=arr)
         raise HistoryError("a history is [x, y], a table of [t, x, y] rows, a sine, or a callable of t")
 
     def __call__(self, t: float) -> np.ndarray:
@@ -128,3 +128,26 @@ class MotionHistory:
         values = np.column_stack([np.interp(knots, tab[:, 0], tab[:, 1]), np.interp(knots, tab[:, 0], tab[:, 2])])
         area = np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(knots)[:, None], axis=0)
         return area if t >= 0 else -area
+
+
+    def to_json(self) -> dict | None:
+        """A JSON-able form (None for a Python callable, which a file cannot hold)."""
+        if self.function is not None:
+            return None
+        if self.table is not None:
+            return {"table": np.asarray(self.table).tolist()}
+        if self.amplitude is not None:
+            return {"amplitude": list(self.amplitude), "period": self.period, "phase": self.phase}
+        return {"constant": list(self.constant)}
+
+    @staticmethod
+    def from_json(data: dict) -> TimeHistory:
+        """Inverse of :meth:`to_json`."""
+        if "amplitude" in data:
+            return TimeHistory.sine(data["amplitude"], data["period"], data["phase"])
+        if "table" in data:
+            return TimeHistory(table=np.asarray(data["table"], dtype=float))
+        return TimeHistory(constant=(float(data["constant"][0]), float(data["constant"][1])))
+
+
+MotionHistory = TimeHistory  # a prescribed displacement, velocity or acceleration history
