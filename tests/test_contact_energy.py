@@ -155,3 +155,78 @@ def test_block_bridging_an_acute_corner_rests_without_gaining_energy(method):
     speed = np.hypot(res.array("velocity")[:, 2, 0], res.array("velocity")[:, 2, 1])
     assert speed.max() < 0.05
     assert res.closed_contacts[-1] >= 3  # it rests on both supports
+
+
+def _block_beside_a_corner_on_its_edge_line():
+    """A free block on a fixed base beside a fixed overhang whose corner v lies on the line of the
+    block's top edge, 2 cm beyond the block's corner q (within d0 = 3.1 cm).
+
+    v and q make a vertex-vertex contact (entrance line: the block's top edge, gap 0): the
+    geometry of the sliver ejected in the random jointed slope (benchmarks/probe_contact_energy.py,
+    seed 4), where the roof's corner stood beyond the sliver's neighbour's edge.
+    """
+    m = srdda.Model(gravity=(0.0, -9.81))
+    m.add_material("rock", srdda.Material(density=2700.0, young=5e9, poisson=0.25))
+    m.add_joint_material("j", JointMaterial(friction_angle=30.0), between=[("rock", "rock")])
+    m.add_block([[-1, -1.5], [3, -1.5], [3, -0.5], [-1, -0.5]], "rock", fixed=True)  # base
+    m.add_block([[-1, 0], [-0.02, 0], [0.48, 1], [-1, 1]], "rock", fixed=True)  # overhang, corner v (-0.02, 0)
+    m.add_block([[0, 0], [0.3, -0.5], [1.3, -0.5], [1, 0]], "rock")  # the block, corner q at (0, 0)
+    return m
+
+
+def test_new_vertex_vertex_contact_starts_with_an_unstretched_shear_spring():
+    # The shear reference of a new contact is v's projection on the edge's line: beyond the edge's
+    # end for a vertex-vertex contact. Clipped to the end (the bug) the locked spring started
+    # stretched by |v - q| = 2 cm, a force k_s·0.02 created from nothing. Exact identity, to rounding.
+    m = _block_beside_a_corner_on_its_edge_line()
+    arrays = m.arrays()
+    params = ContactParameters(2.5e11, 1e11, 0.03125, np.radians(3.0), 0.0125)
+    term = ContactModel(arrays, params).prepare(arrays.vertices, None, first_step=True)
+    overhang_corner = int(arrays.block_ptr[1]) + 1
+    vv = (term.found[:, 0] == overhang_corner) & (term.found[:, 2] == 1)
+    assert np.count_nonzero(vv) == 1 and term.state[vv][0] == LOCKED
+    assert term.geometry.projection[vv][0] == 1.0 and term.reference[vv][0] == pytest.approx(1.02)
+    assert np.max(np.abs(term.shear0)) < 1e-12
+
+
+def _random_jointed_slope(seed):
+    """The 45° slope of benchmarks/probe_contact_energy.py cut by two random joint sets."""
+    import shapely
+    boundary = np.array([(0, -5), (60, -5), (60, 20), (35, 20), (15, 0), (0, 0)], dtype=float)
+    rock_mass = shapely.Polygon([(15, 0), (35, 20), (60, 20), (60, 0)])
+    rng = np.random.default_rng(seed)
+    sets = [srdda.JointSet(dip=float(rng.uniform(15, 40)), spacing=float(rng.uniform(2.5, 5)), joint_type=2,
+                           spacing_sd=0.3, dip_sd=1.0),
+            srdda.JointSet(dip=float(rng.uniform(80, 120)), spacing=float(rng.uniform(3, 6)), trace_length=12.0,
+                           bridge=2.0, joint_type=3, dip_sd=2.0)]
+    traces, types = srdda.joint_traces(rock_mass, sets, seed=seed)
+    cut = srdda.cut_blocks(np.vstack([[[0.0, 0.0, 60.0, 0.0]], traces]), np.concatenate([[1], types]),
+                           edge_node_distance=0.05, boundary=boundary, boundary_type=1)
+    m = srdda.Model(gravity=(0.0, -9.81))
+    m.add_material("rock", srdda.Material(2700.0, 5e9, 0.25, "strain"))
+    m.add_joint_material("bedding", JointMaterial(40.0))
+    m.add_joint_material("s1", JointMaterial(float(rng.uniform(10, 30))))
+    m.add_joint_material("s2", JointMaterial(30.0))
+    b = shapely.bounds(cut.polygons)
+    fixed = (b[:, 1] < -4.99) | (b[:, 2] > 59.99)
+    srdda.add_cut_blocks(m, cut, materials={0: "rock"}, joints={1: "bedding", 2: "s1", 3: "s2"}, fixed=fixed)
+    return m
+
+
+def test_sliver_in_random_jointed_slope_is_not_ejected():
+    # Seed 4 of the robustness probe under dda1: a fixed block's corner stood on the line of a
+    # free block's edge, 0.22 m beyond its end, across a 0.017 m² sliver (a vertex-vertex contact,
+    # d0 = 0.31 m). Closing, its shear spring started stretched by 0.22 m and shot the sliver from
+    # rest to 5.7 m/s at step 7 (20.7 m/s by step 10). Now the blocks only start to settle:
+    # measured 0.103 m/s, the free-fall speed g·t after the 10.6 ms simulated (steps are cut at
+    # the start); bound 0.12 m/s = g · 12 ms, the set Δt·steps. Total energy: never above the
+    # initial by more than 1e-6 of the free blocks' weight × 1 m (measured: never above it).
+    m = _random_jointed_slope(4)
+    res = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=12, method="dda1", penalty=2.5e11))
+    assert res.completed, res.status
+    v = res.array("velocity")
+    assert np.max(np.hypot(v[:, :, 0], v[:, :, 1])) < 0.12
+    a = m.arrays()
+    weight = float(np.sum((2700.0 * a.moments(a.vertices).area * 9.81)[~a.block_fixed]))
+    total = _energy(res, "total")
+    assert np.max(total - total[0]) <= 1e-6 * weight

@@ -31,6 +31,7 @@ class ContactGeometry:
     normal: np.ndarray  # (n, 2) outward normal of the edge
     tangent: np.ndarray  # (n, 2) unit edge direction
     projection: np.ndarray  # (n,) edge parameter of the projection of v, clipped to [0, 1]
+    parameter: np.ndarray  # (n,) edge parameter of the projection of v on the edge's line, not clipped
     foot: np.ndarray  # (n, 2) projection point q on the edge
     gap: np.ndarray  # (n,) signed normal distance (negative: penetration)
     edge_start: np.ndarray  # (n, 2)
@@ -54,8 +55,9 @@ def contact_geometry(vertices: np.ndarray, vertex_block: np.ndarray, next_vertex
     tangent = d / length[:, None]
     normal = np.column_stack([tangent[:, 1], -tangent[:, 0]])
     rel = p - p0
-    ratio = np.clip(np.einsum("nk,nk->n", rel, d) / length**2, 0.0, 1.0)
-    return ContactGeometry(vertex_block[vertex], vertex_block[edge], p, normal, tangent, ratio,
+    parameter = np.einsum("nk,nk->n", rel, d) / length**2
+    ratio = np.clip(parameter, 0.0, 1.0)
+    return ContactGeometry(vertex_block[vertex], vertex_block[edge], p, normal, tangent, ratio, parameter,
                            p0 + ratio[:, None] * d, np.einsum("nk,nk->n", rel, normal), p0, d)
 
 

@@ -251,7 +251,10 @@ class ContactModel:
         state[kept] = previous.state[src]
         sign = np.zeros(len(found), dtype=np.int8)
         sign[kept] = previous.sign[src]
-        reference = geom.projection.copy()
+        # a new, sliding or open contact starts its shear spring unstretched: the reference is the
+        # projection of v on the edge's line, beyond the edge's end for a vertex-vertex contact
+        # (clipped to the end, a new locked spring would start stretched by up to d0)
+        reference = geom.parameter.copy()
         keep_reference = kept.copy()
         keep_reference[kept] = previous.state[src] == LOCKED
         reference[keep_reference] = previous.reference[old[keep_reference]]
