@@ -12,6 +12,7 @@ import dataclasses
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -28,6 +29,14 @@ MERGE_FACTOR = 1.25  # DC merges intersections closer than 1.25 e00 w0 (ntdda ge
 
 class DDAInputError(ValueError):
     """An existing DDA input file is unreadable (the message names the file and the item)."""
+
+
+def read_input_text(path: Path) -> str:
+    """The text of an input file; an unreadable file is a :class:`DDAInputError` naming it."""
+    try:
+        return path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise DDAInputError(f"{path}: cannot read ({exc.strerror})") from None
 
 
 def domain_scale(segments: np.ndarray) -> float:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .ddainput import BlockMaterialSpec, DDAInput, DDAInputError
+from .ddainput import BlockMaterialSpec, DDAInput, DDAInputError, read_input_text
 
 __all__ = ["read_ddaml"]
 
@@ -25,10 +25,7 @@ def _local(tag: str) -> str:
 
 def _parse(path: Path) -> ET.Element:
     """The XML root; element prefixes without a namespace declaration (``Berkeley:`` alone) are dropped."""
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError as exc:
-        raise DDAInputError(f"{path}: cannot read ({exc.strerror})") from None
+    text = read_input_text(path)
     try:
         return ET.fromstring(text)
     except ET.ParseError as exc:

@@ -20,16 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .ddainput import BlockMaterialSpec, DDAInput, DDAInputError
+from .ddainput import BlockMaterialSpec, DDAInput, DDAInputError, read_input_text
 
 __all__ = ["read_legacy"]
 
 
 def _numbers(path: Path) -> np.ndarray:
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError as exc:
-        raise DDAInputError(f"{path}: cannot read ({exc.strerror})") from None
+    text = read_input_text(path)
     try:
         return np.array([float(t) for t in text.split()])
     except ValueError as exc:
