@@ -147,14 +147,9 @@ class PinSection(PointRef):
     name: str = ""
 
 
-class SpringSection(_Strict):
+class SpringSection(PointSpringSection):
     """A linear spring with optional dashpot between two block points (srdda.constraints.springs)."""
 
-    a: Point
-    b: Point
-    block_a: str | int | None = None
-    block_b: str | int | None = None
-    stiffness: Stiffness = Field(gt=0)
     rest_length: float | None = Field(None, ge=0)
     damping: float = Field(0.0, ge=0)  # N·s/m
     kind: Literal["axial", "offset"] = "axial"
