@@ -17,20 +17,23 @@ density; the choices here (docs/constraints.md, "Sine wave"):
   wave travels about 3 m per period and three periods fit in the 10 m chain
   by step 900 (with a rock density the wave would cross the chain in 5 steps).
 
-Reading a period off the wave (``wave_periods``): at step N (a multiple of
-300) the transverse displacement profile of the bar centroids is taken along
-the chain; its zero crossings z_1 < z_2 < ... are found by linear
-interpolation; z_0 is A (the drive is at zero at N); the front crossing (the
-motion emitted at step 0) is not sharp in a dispersive chain, so it is
-extrapolated a quarter wavelength beyond the outermost crest. A distance
-becomes a number of steps through the phase velocity of the discrete chain at
-the drive frequency, c_p = ω/κ with ω = 2·sqrt(k/m)·sin(κa/2) (a = 0.25 m the
-bar spacing). Period j (counted from the front, j = 1 the earliest emitted)
-spans two consecutive half-wavelengths.
+Reading a period off the wave (``profile_periods``): at step N (a multiple
+of 300) the transverse displacement profile of the bar centroids is taken
+along the chain; its zero crossings z_1 < z_2 < ... are found by linear
+interpolation inside the wave (where |v| > 1% of the amplitude); z_0 is A (the
+drive is at zero at N). A distance becomes a number of steps through the
+phase velocity of the discrete chain at the drive frequency, c_p = ω/κ with
+ω = 2·sqrt(k/m)·sin(κa/2) (a = 0.25 m the bar spacing). A period spans two
+consecutive half-wavelengths counted from A, [z_0, z_2], [z_2, z_4], ...; the
+earliest period (emitted from step 0) has no zero crossing at its front,
+because in a dispersive chain the displacement ahead of the front decays
+without crossing zero, so it is read as twice its trailing half-wave (the one
+bounded by two crossings; docs/constraints.md compares other readings).
 """
 from __future__ import annotations
 
 import numpy as np
+from scipy.integrate import solve_ivp
 
 from ..constraints import MotionHistory
 from ..model import Material, Model
@@ -41,7 +44,8 @@ from .registry import Example, Row, register
 # the block-contact search off where RunSettings has the switch (issue 3).
 _NO_CONTACTS = {"contacts": False} if "contacts" in RunSettings.__dataclass_fields__ else {}
 
-__all__ = ["SINE_WAVE", "build", "tables", "wave_periods", "phase_velocity", "PAPER_PERIODS"]
+__all__ = ["SINE_WAVE", "build", "tables", "wave_periods", "profile_periods", "chain_reference",
+           "phase_velocity", "PAPER_PERIODS"]
 
 N_BARS, BAR_LENGTH, BAR_HEIGHT = 40, 0.25, 0.10
 SPRING = 2e8  # N/m
@@ -83,23 +87,51 @@ def _crossings(x: np.ndarray, v: np.ndarray) -> np.ndarray:
     return x[s] - v[s] * (x[s + 1] - x[s]) / (v[s + 1] - v[s])
 
 
-def wave_periods(result: Result, step: int) -> list[float]:
-    """Periods (CS) read off the wave profile at ``step``, earliest emitted first (see module doc)."""
-    steps = list(result.step)
-    c = result.array("centroid")
-    x0 = c[0, :, 0]
-    v = c[steps.index(step), :, 1] - c[0, :, 1]
-    zeros = _crossings(x0[1:], v[1:])
-    moving = np.flatnonzero(np.abs(v) > 0.5 * AMPLITUDE)
-    beyond = x0 > (zeros[-1] if len(zeros) else x0[0])
-    tail = np.flatnonzero(beyond)
-    crest = tail[np.argmax(np.abs(v[tail]))] if len(tail) and len(moving) else None
-    if crest is None:
+def profile_periods(x: np.ndarray, v: np.ndarray) -> list[float]:
+    """Periods (CS) in the profile ``v`` at bar positions ``x`` (A = x[0]), earliest emitted first.
+
+    Zero crossings and the front period's trailing half-wave as in the module doc.
+    """
+    x, v = np.asarray(x, float), np.asarray(v, float)
+    in_wave = np.flatnonzero(np.abs(v) > 0.01 * AMPLITUDE)
+    if len(in_wave) == 0:
         return []
-    front = x0[crest] + (x0[crest] - (zeros[-1] if len(zeros) else x0[0]))
-    marks = np.concatenate([[x0[0]], zeros, [front]])[::-1]  # front first, A last
+    last = in_wave[-1] + 1
+    marks = np.concatenate([[x[0]], _crossings(x[1:last + 1], v[1:last + 1])])
     metres_per_step = phase_velocity() * DT
-    return [float((marks[i] - marks[i + 2]) / metres_per_step) for i in range(0, len(marks) - 2, 2)]
+    periods = [float((marks[i + 2] - marks[i]) / metres_per_step) for i in range(0, len(marks) - 2, 2)]
+    if len(marks) % 2 == 0:  # a half-wave is left over: the trailing half of the front period
+        periods.append(float(2.0 * (marks[-1] - marks[-2]) / metres_per_step))
+    return periods[::-1]
+
+
+def wave_periods(result: Result, step: int) -> list[float]:
+    """Periods (CS) read off the wave profile of ``result`` at ``step``, earliest emitted first."""
+    c = result.array("centroid")
+    n = list(result.step).index(step)
+    return profile_periods(c[0, :, 0], c[n, :, 1] - c[0, :, 1])
+
+
+def chain_reference(steps: np.ndarray) -> np.ndarray:
+    """Transverse centroid displacements (len(steps), N_BARS) of the chain's ODEs, by scipy.
+
+    The independent reference for the layout above: m·v̈_i = k(v_{i+1} - 2v_i + v_{i-1}),
+    bar 1 moved by the drive, bar 40 with one spring (B free vertically), no time step error
+    (DOP853, rtol 1e-10).
+    """
+    mass = DENSITY * BAR_LENGTH * BAR_HEIGHT
+    omega = 2 * np.pi / (PERIOD_STEPS * DT)
+
+    def rates(t: float, y: np.ndarray) -> np.ndarray:
+        v = np.concatenate([[AMPLITUDE * np.sin(omega * t)], y[:N_BARS - 1]])
+        force = SPRING * (v[:-1] - v[1:])
+        force[:-1] += SPRING * (v[2:] - v[1:-1])
+        return np.concatenate([y[N_BARS - 1:], force / mass])
+
+    t = np.asarray(steps, float) * DT
+    sol = solve_ivp(rates, (0.0, float(t.max())), np.zeros(2 * (N_BARS - 1)), t_eval=t, method="DOP853",
+                    rtol=1e-10, atol=1e-12)
+    return np.column_stack([AMPLITUDE * np.sin(omega * t), sol.y[:N_BARS - 1].T])
 
 
 def tables(results: dict[str, Result]) -> list[Row]:
