@@ -68,3 +68,8 @@ def test_pivot_table_puts_ours_beside_the_paper() -> None:
     assert header == ["quantity", "CS", "exact", "DDA0 ours", "DDA0 paper", "SRDDA ours", "SRDDA paper"]
     assert body == [["w", "", "2.000000", "1.90000000 (-5.0000%)", "1.95 (-2.5000%)",
                      "2.00200000 (+0.1000%)", "2.1 (+5.0000%)"]]
+
+
+def test_examples_are_listed_in_the_papers_order() -> None:
+    # `srdda paper all` and the report follow section 4's order, whatever the import order
+    assert [e.title.split()[0] for e in EXAMPLES.values()] == ["4.1", "4.2", "4.3", "4.4", "4.5"]

@@ -55,7 +55,11 @@ EXAMPLES: dict[str, Example] = {}
 
 
 def register(example: Example) -> Example:
+    """Add ``example``; EXAMPLES stays in the paper's order (titles start with the section number)."""
     EXAMPLES[example.name] = example
+    ordered = sorted(EXAMPLES.values(), key=lambda e: e.title)
+    EXAMPLES.clear()
+    EXAMPLES.update((e.name, e) for e in ordered)
     return example
 
 

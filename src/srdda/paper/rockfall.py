@@ -128,7 +128,7 @@ def tables(results: dict[str, Result]) -> list[Row]:
             rows.append(_row("Table 7", f"contact_{i + 1}_step", None, method, ours_step, paper_step, None))
             rows.append(_row("Table 7", f"contact_{i + 1}_time", None, method,
                              None if ours_step is None else res.time[steps.index(ours_step)],
-                             None if paper_step is None else paper_step * DT, None))
+                             None if paper_step is None else round(paper_step * DT, 9), None))
             rows.append(_row("Table 7", f"omega_after_contact_{i + 1}", None if ours_step is None else ours_step + 1,
                              method, ours_omega, paper_omega, None))
     return rows
