@@ -30,7 +30,8 @@ def _stub_tables(results):
 @pytest.fixture
 def stub_examples(monkeypatch: pytest.MonkeyPatch) -> list[str]:
     build = lambda method: (rod_model(), rod_settings(method, n_steps=150))  # noqa: E731
-    monkeypatch.setitem(EXAMPLES, "stubrod", Example("stubrod", "Stub rod", _stub_tables, builder=build))
+    monkeypatch.setitem(EXAMPLES, "stubrod", Example("stubrod", "Stub rod", _stub_tables, builder=build,
+                                                          notes="Stub choices: a 0.1 m thick rod."))
 
     def broken(results):
         raise KeyError("step 9999 was not recorded")
@@ -43,6 +44,7 @@ def test_report_is_written_from_its_own_runs(tmp_path: Path, stub_examples: list
     runs, (md, html) = make_report(tmp_path, stub_examples, METHODS, command="srdda paper test --report x")
     text = md.read_text()
     assert "## Stub rod" in text and "### Table S1" in text and "### Table S2" in text
+    assert "## Stub rod\n\nStub choices: a 0.1 m thick rod." in text  # the example's choices, under its title
     # every 'ours' number of the report is the value in the run's own results file
     for m in METHODS:
         stored = read_results(tmp_path / "runs" / f"stubrod_{m}.h5")
@@ -73,3 +75,5 @@ def test_pivot_table_puts_ours_beside_the_paper() -> None:
 def test_examples_are_listed_in_the_papers_order() -> None:
     # `srdda paper all` and the report follow section 4's order, whatever the import order
     assert [e.title.split()[0] for e in EXAMPLES.values()] == ["4.1", "4.2", "4.3", "4.4", "4.5"]
+    # each says, in the report, what it chose where the paper is silent
+    assert all(len(e.notes) > 40 for e in EXAMPLES.values())

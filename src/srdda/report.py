@@ -69,6 +69,7 @@ class ExampleRun:
     wall_seconds: dict[str, float]
     files: dict[str, Path] = field(default_factory=dict)
     errors: list[str] = field(default_factory=list)
+    notes: str = ""  # the example's choices where the paper is silent
 
 
 # -- figure makers -------------------------------------------------------------------
@@ -191,7 +192,7 @@ def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = ME
             figures += FIGURES.get(name, _generic)(results, model) + _common(results)
         except Exception as exc:
             errors.append(f"figures: {type(exc).__name__}: {exc}")
-        out.append(ExampleRun(name, example.title, results, rows, figures, wall, files, errors))
+        out.append(ExampleRun(name, example.title, results, rows, figures, wall, files, errors, example.notes))
     return out
 
 
@@ -310,6 +311,9 @@ def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str
         methods = list(run_.results)
         md += [f"## {run_.title}", ""]
         hb.append(f"<h2>{html.escape(run_.title)}</h2>")
+        if run_.notes:
+            md += [run_.notes, ""]
+            hb.append(f"<p>{html.escape(run_.notes)}</p>")
         header, body = _runs_table(run_)
         md += [_md_table(header, body), ""]
         hb.append(_html_table(header, body))

@@ -39,6 +39,7 @@ class Example:
     tables: Callable[[dict[str, Result]], list[Row]]
     model_file: str | None = None  # under examples/paper/
     builder: Callable[[str], tuple[Model, RunSettings]] | None = None
+    notes: str = ""  # the choices made where the paper is silent, for the report (Markdown)
 
     def build(self, method: str) -> tuple[Model, RunSettings]:
         """The model and run settings of this example for ``method``."""
