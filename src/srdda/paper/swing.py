@@ -84,9 +84,9 @@ def rod_tables(results: dict[str, Result]) -> list[Row]:
 
 PENDULUM = register(Example(
     "pendulum", "4.1 Simple pendulum", pendulum_tables, model_file="pendulum.toml",
-    notes="The exact ω_max is the paper's, for a point mass; the body modelled (a 0.2 m square bob on a "
-          "rod) has ω_max = 1.414166 (RE −0.0034%), the floor of any accurate method. The pin is a fixed-point "
-          "penalty spring. docs/paper-examples.md, 4.1."))
+    notes="The exact ω_max is the paper's, for a point mass; the body modelled (a 0.2 m square bob tied by "
+          "two point springs to a massless 9.90 × 0.05 m rod) has ω_max = 1.414166 (RE −0.0034%), the floor of "
+          "any accurate method. The pivot is a fixed-point penalty spring. docs/paper-examples.md, 4.1."))
 ROD = register(Example(
     "rod", "4.2 Swing of a slender rod", rod_tables, model_file="rod.toml",
     notes="The exact ω_max is the paper's, for a thin rod; the 0.1 m thick rod modelled has "
