@@ -26,25 +26,21 @@ from srdda.assembly.system import BlockSystem
 from srdda.kinematics.shape import NDOF, block_mass_matrix
 from srdda.solvers import get_solver
 
+from bench_core import bar_blocks
+
 
 def hinged_chain(n: int) -> srdda.Model:
-    m = srdda.Model(gravity=(0.0, -10.0))
-    m.add_material("rock", srdda.Material(2500.0, 1e10, 0.25))
-    for i in range(n):
-        m.add_block([[i, -0.1], [i + 1, -0.1], [i + 1, 0.1], [i, 0.1]], "rock")
-        if i:
-            m.add_hinge([i, 0.0], block_a=i - 1, block_b=i)
+    m = bar_blocks(n)
+    for i in range(1, n):
+        m.add_hinge([i, 0.0], block_a=i - 1, block_b=i)
     m.add_pin([0.0, 0.0], block=0)
     return m
 
 
 def spring_chain(n: int) -> srdda.Model:
-    m = srdda.Model(gravity=(0.0, -10.0))
-    m.add_material("rock", srdda.Material(2500.0, 1e10, 0.25))
-    for i in range(n):
-        m.add_block([[i, -0.1], [i + 1, -0.1], [i + 1, 0.1], [i, 0.1]], "rock")
-        if i:
-            m.add_point_spring([i, 0.0], [i, 0.0], 1e10, block_a=i - 1, block_b=i)
+    m = bar_blocks(n)
+    for i in range(1, n):
+        m.add_point_spring([i, 0.0], [i, 0.0], 1e10, block_a=i - 1, block_b=i)
     m.add_fixed_point([0.0, 0.0], block=0, stiffness=1e10)
     return m
 

@@ -27,14 +27,20 @@ def rod_model() -> srdda.Model:
     return m
 
 
-def chain_model(n: int) -> srdda.Model:
+def bar_blocks(n: int) -> srdda.Model:
+    """n bars 1 × 0.2 m end to end along x, untied (the chain benchmarks add their ties)."""
     m = srdda.Model(gravity=(0.0, -10.0))
     m.add_material("rock", srdda.Material(2500.0, 1e10, 0.25))
     for i in range(n):
         m.add_block([[i, -0.1], [i + 1, -0.1], [i + 1, 0.1], [i, 0.1]], "rock")
-        if i:
-            for y in (-0.1, 0.1):
-                m.add_point_spring([i, y], [i, y], 1e9, block_a=i - 1, block_b=i)
+    return m
+
+
+def chain_model(n: int) -> srdda.Model:
+    m = bar_blocks(n)
+    for i in range(1, n):
+        for y in (-0.1, 0.1):
+            m.add_point_spring([i, y], [i, y], 1e9, block_a=i - 1, block_b=i)
     m.add_fixed_point([0.0, 0.0], block=0, stiffness=1e10)
     return m
 
