@@ -19,11 +19,9 @@ import time
 import numpy as np
 
 import srdda
-from srdda.constraints import step_terms
-from srdda.integrators import method_preset
-from srdda.simulation import StepContext, initial_state
+from srdda.state import initial_state
+from srdda.step import Stepper
 from srdda.assembly.system import BlockSystem
-from srdda.kinematics.shape import NDOF, block_mass_matrix
 from srdda.solvers import get_solver
 
 from bench_core import bar_blocks
@@ -48,20 +46,10 @@ def spring_chain(n: int) -> srdda.Model:
 def first_step_system(model: srdda.Model, dt: float = 1e-3) -> BlockSystem:
     """The assembled system of the first step (block terms and constraint rows)."""
     arrays = model.arrays()
-    method = method_preset("dda0")
-    state = initial_state(arrays, method)
-    coeffs = method.scheme.coefficients(dt)
-    mom = state.moments
-    M = arrays.density[:, None, None] * block_mass_matrix(mom.area, mom.sxx, mom.syy, mom.sxy)
-    diag = coeffs.c_m * M
-    diag[:, 3:, 3:] += coeffs.c_k * mom.area[:, None, None] * arrays.elasticity
-    rhs = np.zeros((arrays.n_blocks, NDOF))
-    rhs[:, :2] += (arrays.density * mom.area)[:, None] * arrays.gravity
-    system = BlockSystem(diag, rhs)
-    ctx = StepContext(arrays, state, method, coeffs, dt, dt, 1e9)
-    for term in step_terms(arrays):
-        term.add_to(system, ctx)
-    return system
+    stepper = Stepper(arrays, srdda.RunSettings(dt=dt, n_steps=1, method="dda0", contacts=False),
+                      get_solver("superlu"))
+    ctx, terms = stepper.begin(initial_state(arrays, stepper.method), dt)
+    return stepper.assemble(ctx, terms)
 
 
 def best_of(fn, repeat: int = 5) -> float:

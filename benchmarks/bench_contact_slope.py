@@ -64,7 +64,7 @@ def main(steps: int, profile: bool) -> None:
     solves: list[int] = []
 
     class Count:
-        def record(self, arrays, state, penalty, n):  # noqa: ANN001
+        def record(self, arrays, state, n, energy):  # noqa: ANN001
             solves.append(n)
 
         def finish(self, status, state):  # noqa: ANN001

@@ -36,7 +36,7 @@ class PhantomCounter:
     def __init__(self) -> None:
         self.counts = dict(steps=0, contacts=0, short_phantom=0, long=0, long_phantom=0, closed_phantom=0)
 
-    def record(self, arrays, state, penalty, solves) -> None:
+    def record(self, arrays, state, solves, energy) -> None:
         c = state.contacts
         self.counts["steps"] += 1
         if c is None or len(c.vertex) == 0:

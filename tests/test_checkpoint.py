@@ -10,7 +10,8 @@ import numpy as np
 import srdda
 from srdda.io.checkpoint import append_checkpoint, checkpoint_count, read_checkpoint, truncate_checkpoints
 from srdda.io.results_store import ResultsStore, contacts_from_state, read_results
-from srdda.simulation import State, initial_state
+from srdda.ledger import ENERGY_NAMES
+from srdda.state import State, initial_state
 from results_models import two_block_model
 
 
@@ -112,7 +113,7 @@ def test_contact_sets_on_the_state_are_recorded_by_default(tmp_path: Path) -> No
 
     store = ResultsStore(tmp_path / "s.h5", srdda.RunSettings(dt=1e-3, n_steps=4), flush_every=2)
     for s in _states(5):
-        store.record(arrays, s, 1e9, 1)
+        store.record(arrays, s, 1, dict.fromkeys(ENERGY_NAMES, 0.0))
     store.finish("completed", s)
     stored = read_results(tmp_path / "s.h5")
     np.testing.assert_array_equal(stored.contacts["step"], [0, 1, 3, 4])  # step 2 has no contact set

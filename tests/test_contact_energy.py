@@ -60,8 +60,8 @@ def test_rockfall_srdda_keeps_omega_before_the_first_contact(rockfall_srdda):
 def test_rockfall_penetration_within_tolerance_every_step(rockfall_srdda):
     model, settings, res = rockfall_srdda
     arrays = model.arrays()
-    w0 = srdda.simulation.model_half_height(arrays.vertices)
-    limit = srdda.simulation.contact_parameters(arrays, settings, w0).max_penetration
+    w0 = srdda.step.model_half_height(arrays.vertices)
+    limit = srdda.step.contact_parameters(arrays, settings, w0).max_penetration
     assert max(res.max_penetration) <= limit
     assert max(res.closed_contacts) > 0
 

@@ -85,7 +85,7 @@ def test_automatic_penalty_is_a_multiple_of_young():
     # plane stress: 1/C11 = E exactly
     arrays = _falling_block_over_far_ground().arrays()
     s = srdda.RunSettings(dt=1e-3, n_steps=1, auto_penalty=50.0, shear_ratio=0.5)
-    p = srdda.simulation.contact_parameters(arrays, s, 51.0)
+    p = srdda.step.contact_parameters(arrays, s, 51.0)
     assert p.normal_stiffness == pytest.approx(50.0 * 1e9, rel=1e-12)
     assert p.shear_stiffness == pytest.approx(25.0 * 1e9, rel=1e-12)
     assert p.distance == pytest.approx(2.5 * 0.01 * 51.0, rel=1e-12)  # d0 = 2.5 g2 w0

@@ -8,7 +8,7 @@ import pytest
 import srdda
 from srdda import plotting
 from srdda.io.results_store import ResultsStore, read_results
-from srdda.simulation import Result
+from srdda.results import Result
 from results_models import rod_model, rod_settings, two_block_model
 
 matplotlib.use("Agg")

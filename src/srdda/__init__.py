@@ -17,7 +17,10 @@ from .contact import ContactSet
 from .geometry import PolygonError, block_moments
 from .integrators import METHODS, Method, TimeScheme, method_preset
 from .model import JointMaterial, Load, Material, Model, ModelError
-from .simulation import DivergenceError, Result, RunSettings, State, StepRejected, run
+from .results import Result
+from .settings import RunSettings
+from .simulation import run
+from .state import State
 from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume
 from .geometry.cutting import BlockCut, CuttingError, cut_blocks
@@ -27,9 +30,9 @@ from .cutmodel import add_cut_blocks
 __version__ = "0.1.0"
 
 __all__ = [
-    "METHODS", "ContactSet", "DivergenceError", "JointMaterial", "Load", "Material", "Method", "Model", "ModelError",
+    "METHODS", "ContactSet", "JointMaterial", "Load", "Material", "Method", "Model", "ModelError",
     "MotionHistory", "PolygonError", "TimeHistory", "hinge_forces",
-    "Result", "RunSettings", "State", "StepRejected", "TimeScheme", "available_solvers", "block_moments",
+    "Result", "RunSettings", "State", "TimeScheme", "available_solvers", "block_moments",
     "get_solver", "method_preset", "run", "__version__", "ResultsStore", "StoredResult", "read_results", "resume",
     "BlockCut", "CuttingError", "JointSet", "add_cut_blocks", "circular_opening", "cut_blocks", "joint_traces",
     "polygonal_opening",

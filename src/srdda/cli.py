@@ -21,7 +21,8 @@ from .io.convert import convert
 from .io.modelfile import ModelFileError, load_model
 from .io.results_store import ResultsStore
 from .paper import EXAMPLES, relative_error, run_example
-from .simulation import Result, run
+from .results import Result
+from .simulation import run
 from .solvers import available_solvers
 
 __all__ = ["main"]

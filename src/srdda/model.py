@@ -16,6 +16,7 @@ import shapely
 from .constraints.data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
 from .history import HistoryError, MotionHistory, TimeHistory
 from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon
+from .kinematics.blocktype import PLANE, BlockType, block_type_of_dimension
 
 __all__ = ["JointMaterial", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
 
@@ -74,6 +75,9 @@ def elasticity_matrix(mat: Material) -> np.ndarray:
 
 
 
+# columns of ModelArrays.joint_properties
+JOINT_FRICTION, JOINT_COHESION, JOINT_TENSION = range(3)
+
 Load = TimeHistory  # a force (N) as a function of time: constant, table, sine or callable of t
 
 
@@ -123,11 +127,16 @@ class ModelArrays:
     edge_joint: np.ndarray  # (nv,) joint material of the edge starting at each vertex, -1 = by materials
     joint_properties: np.ndarray  # (nj, 3): friction angle (rad), cohesion (Pa), tensile strength (Pa)
     joint_by_materials: np.ndarray  # (nm, nm) joint index for a pair of block materials
-    links: ConstraintArrays = field(default_factory=ConstraintArrays)  # hinges, springs, prescribed motion
+    links: ConstraintArrays  # hinges, springs, prescribed motion
 
     @property
     def n_blocks(self) -> int:
         return len(self.block_ptr) - 1
+
+    @property
+    def block_type(self) -> BlockType:
+        """The blocks' type, by the dimension of the vertices."""
+        return block_type_of_dimension(self.vertices.shape[1])
 
     def moments(self, vertices: np.ndarray) -> BlockMoments:
         """Exact block integrals of a configuration of this model's blocks."""
@@ -383,9 +392,9 @@ class Model:
         sizes = [len(g) for g in groups]
         offsets = np.concatenate([[0], np.cumsum(sizes)])
         rows = [np.arange(offsets[i], offsets[i + 1]) for i in range(5)]
-        pts = np.array([p for g in groups for p in g], dtype=float).reshape(-1, 2)
+        pts = np.array([p for g in groups for p in g], dtype=float).reshape(-1, PLANE.dim)
         link_pts, link_owners, links = compile_links(self.hinges, self.springs, self.prescribed,
-                                                     self.base_acceleration, len(pts))
+                                                     self.base_acceleration, len(pts), PLANE.dim)
         pts = np.concatenate([pts, link_pts])
         block_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         elasticity = np.array([elasticity_matrix(mats[b.material]) for b in self.blocks])

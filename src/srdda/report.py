@@ -37,7 +37,8 @@ from . import __version__, plotting  # noqa: E402
 from .integrators.methods import METHODS  # noqa: E402
 from .io.results_store import ResultsStore  # noqa: E402
 from .model import Model  # noqa: E402
-from .simulation import Result, run  # noqa: E402
+from .results import Result  # noqa: E402
+from .simulation import run  # noqa: E402
 
 __all__ = ["ExampleRun", "FIGURES", "register_figures", "run_examples", "write_report", "make_report",
            "pivot_table"]

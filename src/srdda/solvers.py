@@ -31,7 +31,7 @@ import scipy.sparse.linalg as spla
 
 from .assembly.system import BlockSystem
 
-__all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "DENSE_LIMIT"]
+__all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "DENSE_LIMIT", "SOLVERS"]
 
 DENSE_LIMIT = 120
 
@@ -132,6 +132,7 @@ class AutoSolver:
 _BACKENDS = {"dense": DenseSolver, "superlu": SuperLUSolver, "cholmod": CholmodSolver,
              "pardiso": PardisoSolver, "auto": AutoSolver}
 _MODULES = {"cholmod": "sksparse", "pardiso": "pypardiso"}
+SOLVERS = tuple(_BACKENDS)
 
 
 def available_solvers() -> list[str]:

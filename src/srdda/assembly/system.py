@@ -1,7 +1,7 @@
-"""The global block system: 6×6 sub-matrices assembled into one sparse matrix.
+"""The global block system: ndof×ndof sub-matrices assembled into one sparse matrix.
 
-Sub-matrices are kept as dense stacks until the solve: ``diag`` (nb, 6, 6) for
-every block and ``pair_blocks`` (np, 6, 6) for coupled pairs (row block
+Sub-matrices are kept as dense stacks until the solve: ``diag`` (nb, ndof, ndof)
+for every block and ``pair_blocks`` (np, ndof, ndof) for coupled pairs (row block
 ``pair_i``, column block ``pair_j``, both orders present). Conversion to CSR is
 one ``coo_matrix`` call; to dense (tiny models) one ``np.add.at``.
 
@@ -17,19 +17,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..kinematics.shape import NDOF
-
 __all__ = ["BlockSystem", "PenaltyPairs", "add_penalty_pairs"]
-
-_R6, _C6 = np.meshgrid(np.arange(NDOF), np.arange(NDOF), indexing="ij")
 
 
 @dataclass
 class BlockSystem:
-    """Global matrix of ``n_blocks`` blocks, NDOF unknowns each, and its right-hand side."""
+    """Global matrix of ``n_blocks`` blocks, ``ndof`` unknowns each, and its right-hand side."""
 
-    diag: np.ndarray  # (nb, 6, 6)
-    rhs: np.ndarray  # (nb, 6)
+    diag: np.ndarray  # (nb, ndof, ndof)
+    rhs: np.ndarray  # (nb, ndof)
     pair_i: list[np.ndarray] = field(default_factory=list)
     pair_j: list[np.ndarray] = field(default_factory=list)
     pair_blocks: list[np.ndarray] = field(default_factory=list)
@@ -38,13 +34,22 @@ class BlockSystem:
     con_vals: list[np.ndarray] = field(default_factory=list)
     con_rhs: list[np.ndarray] = field(default_factory=list)
 
+    @staticmethod
+    def empty(n_blocks: int, ndof: int) -> BlockSystem:
+        """A zero system of ``n_blocks`` blocks with ``ndof`` unknowns each."""
+        return BlockSystem(np.zeros((n_blocks, ndof, ndof)), np.zeros((n_blocks, ndof)))
+
     @property
     def n_blocks(self) -> int:
         return len(self.diag)
 
     @property
+    def ndof(self) -> int:
+        return self.diag.shape[1]
+
+    @property
     def size(self) -> int:
-        return self.n_blocks * NDOF
+        return self.n_blocks * self.ndof
 
     @property
     def n_constraints(self) -> int:
@@ -52,7 +57,7 @@ class BlockSystem:
 
     def add_point_constraints(self, block_a: np.ndarray, t_a: np.ndarray, block_b: np.ndarray,
                               t_b: np.ndarray | None, rhs: np.ndarray, components: np.ndarray | None = None) -> None:
-        """Add rows T_a·Δd_a - T_b·Δd_b = rhs (n, 2), one per component where ``components`` (n, 2) is True.
+        """Add rows T_a·Δd_a - T_b·Δd_b = rhs (n, dim), one per component where ``components`` (n, dim) is True.
 
         ``block_b == -1`` (or ``t_b`` None) ties the point to the ground.
         Rows are numbered in the order of ``components.ravel()`` after the existing ones.
@@ -60,18 +65,20 @@ class BlockSystem:
         n = len(block_a)
         if n == 0:
             return
-        mask = np.ones((n, 2), dtype=bool) if components is None else np.asarray(components, dtype=bool)
-        rows = np.full((n, 2), -1)
+        shape = np.shape(t_a)  # (n, dim, ndof)
+        ndof = self.ndof
+        mask = np.ones(shape[:-1], dtype=bool) if components is None else np.asarray(components, dtype=bool)
+        rows = np.full(shape[:-1], -1)
         rows[mask] = self.n_constraints + np.arange(int(mask.sum()))
-        pick = np.broadcast_to(mask[:, :, None], (n, 2, NDOF))
-        cols = np.broadcast_to(block_a[:, None, None] * NDOF + np.arange(NDOF), (n, 2, NDOF))
-        self.con_rows.append(np.broadcast_to(rows[:, :, None], (n, 2, NDOF))[pick])
+        pick = np.broadcast_to(mask[:, :, None], shape)
+        cols = np.broadcast_to(block_a[:, None, None] * ndof + np.arange(ndof), shape)
+        self.con_rows.append(np.broadcast_to(rows[:, :, None], shape)[pick])
         self.con_cols.append(cols[pick])
         self.con_vals.append(np.asarray(t_a, dtype=float)[pick])
         if t_b is not None:
-            linked = np.broadcast_to((block_b >= 0)[:, None, None], (n, 2, NDOF)) & pick
-            cols_b = np.broadcast_to(np.maximum(block_b, 0)[:, None, None] * NDOF + np.arange(NDOF), (n, 2, NDOF))
-            self.con_rows.append(np.broadcast_to(rows[:, :, None], (n, 2, NDOF))[linked])
+            linked = np.broadcast_to((block_b >= 0)[:, None, None], shape) & pick
+            cols_b = np.broadcast_to(np.maximum(block_b, 0)[:, None, None] * ndof + np.arange(ndof), shape)
+            self.con_rows.append(np.broadcast_to(rows[:, :, None], shape)[linked])
             self.con_cols.append(cols_b[linked])
             self.con_vals.append(-np.asarray(t_b, dtype=float)[linked])
         self.con_rhs.append(np.asarray(rhs, dtype=float)[mask])
@@ -125,7 +132,7 @@ class BlockSystem:
         """Hold the blocks where ``fixed`` is True: identity rows, zero rhs, couplings dropped."""
         if not np.any(fixed):
             return
-        self.diag[fixed] = np.eye(NDOF)
+        self.diag[fixed] = np.eye(self.ndof)
         self.rhs[fixed] = 0.0
         keep_i, keep_j, keep_b = [], [], []
         for bi, bj, blocks in zip(self.pair_i, self.pair_j, self.pair_blocks):
@@ -135,25 +142,26 @@ class BlockSystem:
             keep_b.append(blocks[free])
         self.pair_i, self.pair_j, self.pair_blocks = keep_i, keep_j, keep_b
         for k, cols in enumerate(self.con_cols):  # a held block's columns drop out of C
-            self.con_vals[k] = np.where(fixed[cols // NDOF], 0.0, self.con_vals[k])
+            self.con_vals[k] = np.where(fixed[cols // self.ndof], 0.0, self.con_vals[k])
 
     def triplets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(rows, cols, values) of every stored entry, duplicates not summed."""
-        nb = self.n_blocks
-        base = np.arange(nb) * NDOF
-        rows = [(base[:, None, None] + _R6).ravel()]
-        cols = [(base[:, None, None] + _C6).ravel()]
+        nb, ndof = self.n_blocks, self.ndof
+        r, c = np.meshgrid(np.arange(ndof), np.arange(ndof), indexing="ij")
+        base = np.arange(nb) * ndof
+        rows = [(base[:, None, None] + r).ravel()]
+        cols = [(base[:, None, None] + c).ravel()]
         vals = [self.diag.ravel()]
         if self.pair_i:
-            bi = np.concatenate(self.pair_i) * NDOF
-            bj = np.concatenate(self.pair_j) * NDOF
-            rows.append((bi[:, None, None] + _R6).ravel())
-            cols.append((bj[:, None, None] + _C6).ravel())
+            bi = np.concatenate(self.pair_i) * ndof
+            bj = np.concatenate(self.pair_j) * ndof
+            rows.append((bi[:, None, None] + r).ravel())
+            cols.append((bj[:, None, None] + c).ravel())
             vals.append(np.concatenate(self.pair_blocks).ravel())
         return np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
 
     def to_bsr(self) -> sp.bsr_matrix:
-        """The matrix in block-sparse rows of 6×6 blocks, duplicates summed.
+        """The matrix in block-sparse rows of ndof×ndof blocks, duplicates summed.
 
         Sorting and summing whole blocks (not their 36 entries) keeps the index
         work 36 times smaller than a COO assembly.
@@ -178,7 +186,7 @@ class BlockSystem:
     def to_dense(self) -> np.ndarray:
         n = self.size
         if not self.pair_i:
-            out = np.zeros((self.n_blocks, NDOF, self.n_blocks, NDOF))
+            out = np.zeros((self.n_blocks, self.ndof, self.n_blocks, self.ndof))
             idx = np.arange(self.n_blocks)
             out[idx, :, idx, :] = self.diag
             return out.reshape(n, n)
@@ -191,7 +199,7 @@ class PenaltyPairs:
     """Point-to-point penalty springs: ½ k |T_a Δd_a - T_b Δd_b + g|².
 
     ``block_b == -1`` ties the point to the ground (a fixed point). ``t_a`` and
-    ``t_b`` are (n, 2, 6) shape functions, ``gap`` (n, 2) the current
+    ``t_b`` are (n, k, ndof) shape functions (k directions), ``gap`` (n, k) the current
     separation x_a - x_b, ``stiffness`` (n,) in N/m.
     """
 

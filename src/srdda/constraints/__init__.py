@@ -1,17 +1,18 @@
-"""Constraints and driven boundaries: hinges and pins by Lagrange multipliers, springs with dashpots,
-prescribed motion (penalty or multipliers), base acceleration, and the energy ledger.
+"""Constraints and driven boundaries: fixed points, point loads, springs with dashpots, hinges and pins by
+Lagrange multipliers, prescribed motion (penalty or multipliers), base acceleration.
 
-``step_terms(arrays)`` gives the :class:`~srdda.simulation.StepTerm` objects a
-model needs; the time loop adds them to every step. See docs/constraints.md.
+``point_terms(arrays, penalty)`` gives the step terms (:class:`srdda.term.Term`)
+a model's points need. See docs/constraints.md.
 """
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec
-from .energy import LEDGER, hinge_forces, link_energy, step_work
 from ..history import HistoryError, MotionHistory
-from .lagrange import LagrangeTerm
+from ..term import Term
+from .data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec
+from .lagrange import LagrangeTerm, hinge_forces
+from .loads import PointLoadTerm
 from .prescribed import BaseAccelerationTerm, PrescribedPenaltyTerm
 from .springs import SpringTerm
 
@@ -19,20 +20,22 @@ if TYPE_CHECKING:
     from ..model import ModelArrays
 
 __all__ = ["ConstraintArrays", "HingeSpec", "PrescribedSpec", "SpringSpec", "MotionHistory", "HistoryError",
-           "LagrangeTerm", "SpringTerm", "PrescribedPenaltyTerm", "BaseAccelerationTerm", "LEDGER",
-           "hinge_forces", "link_energy", "step_work", "step_terms"]
+           "LagrangeTerm", "SpringTerm", "PointLoadTerm", "PrescribedPenaltyTerm", "BaseAccelerationTerm",
+           "hinge_forces", "point_terms"]
 
 
-def step_terms(arrays: ModelArrays) -> list:
-    """The step terms of the model's hinges, pins, springs, prescribed points and base acceleration."""
+def point_terms(arrays: ModelArrays, penalty: float) -> list[Term]:
+    """The terms of the model's fixed points, springs, loads, hinges, driven points and base acceleration."""
     links = arrays.links
-    terms: list = []
+    terms: list[Term] = []
+    if len(arrays.fixed_rows) or len(arrays.spring_rows_a) or len(links.spring_rows_a):
+        terms.append(SpringTerm(penalty))
+    if len(arrays.load_rows):
+        terms.append(PointLoadTerm())
     if links.n_hinges or links.prescribed_multiplier.any():
         terms.append(LagrangeTerm(links))
-    if len(links.spring_rows_a):
-        terms.append(SpringTerm(links))
     if (~links.prescribed_multiplier).any():
-        terms.append(PrescribedPenaltyTerm(links))
+        terms.append(PrescribedPenaltyTerm(links, penalty))
     if links.base_acceleration is not None:
         terms.append(BaseAccelerationTerm(links))
     return terms

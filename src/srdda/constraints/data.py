@@ -74,36 +74,46 @@ class PrescribedSpec:
     stiffness: float | None = None
 
 
-def _rows(n: int) -> np.ndarray:
-    return np.zeros(n, dtype=np.int64)
+def _rows() -> np.ndarray:
+    return np.zeros(0, dtype=np.int64)
 
 
 @dataclass(frozen=True)
 class ConstraintArrays:
-    """Flat arrays of the hinges, springs and prescribed points (rows index ``ModelArrays.points``)."""
+    """Flat arrays of the hinges, springs and prescribed points (rows index ``ModelArrays.points``).
 
-    hinge_rows_a: np.ndarray = field(default_factory=lambda: _rows(0))
-    hinge_rows_b: np.ndarray = field(default_factory=lambda: _rows(0))  # pins: the row of the pin's own point
-    hinge_block_a: np.ndarray = field(default_factory=lambda: _rows(0))
-    hinge_block_b: np.ndarray = field(default_factory=lambda: _rows(0))  # -1 = ground
+    ``dim`` is the number of coordinates of a point: every per-point array has
+    ``dim`` columns and a hinge or pin has ``dim`` multiplier rows.
+    """
+
+    dim: int
+    hinge_rows_a: np.ndarray = field(default_factory=_rows)
+    hinge_rows_b: np.ndarray = field(default_factory=_rows)  # pins: the row of the pin's own point
+    hinge_block_a: np.ndarray = field(default_factory=_rows)
+    hinge_block_b: np.ndarray = field(default_factory=_rows)  # -1 = ground
     hinge_correct: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     hinge_names: tuple[str, ...] = ()
-    spring_rows_a: np.ndarray = field(default_factory=lambda: _rows(0))
-    spring_rows_b: np.ndarray = field(default_factory=lambda: _rows(0))
+    spring_rows_a: np.ndarray = field(default_factory=_rows)
+    spring_rows_b: np.ndarray = field(default_factory=_rows)
     spring_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
     spring_damping: np.ndarray = field(default_factory=lambda: np.zeros(0))
     spring_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))  # axial rest length
-    spring_offset: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # offset kind: r0
+    spring_offset: np.ndarray | None = None  # (n, dim) offset kind: r0
     spring_axial: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
-    prescribed_rows: np.ndarray = field(default_factory=lambda: _rows(0))
-    prescribed_mask: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=bool))
-    prescribed_order: np.ndarray = field(default_factory=lambda: _rows(0))  # 0 displacement, 1 velocity, 2 acceleration
+    prescribed_rows: np.ndarray = field(default_factory=_rows)
+    prescribed_mask: np.ndarray | None = None  # (n, dim) prescribed components
+    prescribed_order: np.ndarray = field(default_factory=_rows)  # 0 displacement, 1 velocity, 2 acceleration
     prescribed_multiplier: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     prescribed_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))  # nan = run's penalty
     prescribed_histories: tuple[MotionHistory, ...] = ()
     prescribed_sources: tuple[tuple[MotionHistory, int], ...] = ()  # distinct (history, order) pairs
-    prescribed_source: np.ndarray = field(default_factory=lambda: _rows(0))  # source of each prescribed point
+    prescribed_source: np.ndarray = field(default_factory=_rows)  # source of each prescribed point
     base_acceleration: MotionHistory | None = None
+
+    def __post_init__(self) -> None:
+        for name, dtype in (("spring_offset", float), ("prescribed_mask", bool)):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.zeros((0, self.dim), dtype=dtype))
 
     @property
     def n_hinges(self) -> int:
@@ -111,14 +121,14 @@ class ConstraintArrays:
 
     @property
     def hinged_block_pairs(self) -> np.ndarray:
-        """(n, 2) block pairs joined by a hinge (for a contact search that should skip them)."""
+        """Block pairs (n, 2) joined by a hinge (contacts between them are left out)."""
         linked = self.hinge_block_b >= 0
         return np.column_stack([self.hinge_block_a[linked], self.hinge_block_b[linked]])
 
     @property
     def n_multipliers(self) -> int:
-        """Constraint rows (multipliers) per step: 2 per hinge or pin, then the driven components."""
-        return 2 * self.n_hinges + int(self.prescribed_mask[self.prescribed_multiplier].sum())
+        """Constraint rows (multipliers) per step: ``dim`` per hinge or pin, then the driven components."""
+        return self.dim * self.n_hinges + int(self.prescribed_mask[self.prescribed_multiplier].sum())
 
     @property
     def active(self) -> bool:
@@ -127,30 +137,22 @@ class ConstraintArrays:
                     or self.base_acceleration is not None)
 
     def prescribed_displacement(self, t: float) -> np.ndarray:
-        """Prescribed displacement (n, 2) of every prescribed point at time t (from its start).
+        """Prescribed displacement (n, dim) of every prescribed point at time t (from its start).
 
         Each distinct (history, quantity) source is evaluated once (many support points
         usually share one record) and spread to its points by ``prescribed_source``.
         """
         if not len(self.prescribed_rows):
-            return np.zeros((0, 2))
+            return np.zeros((0, self.dim))
         values = np.array([h(t) if order == 0 else h.integral(t) if order == 1 else h.double_integral(t)
                            for h, order in self.prescribed_sources])
         return values[self.prescribed_source]
-        keys = [(id(h), int(o)) for h, o in zip(self.prescribed_histories, self.prescribed_order)]
-        unique = {k: i for i, k in enumerate(keys)}  # last index of each distinct pair
-        for first in unique.values():
-            hist, order = self.prescribed_histories[first], self.prescribed_order[first]
-            value = hist(t) if order == 0 else hist.integral(t) if order == 1 else hist.double_integral(t)
-            same = [j for j, k in enumerate(keys) if k == keys[first]]
-            out[same] = value
-        return out
 
 
 def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed: list[PrescribedSpec],
-                  base_acceleration: MotionHistory | None, first_row: int
+                  base_acceleration: MotionHistory | None, first_row: int, dim: int
                   ) -> tuple[np.ndarray, np.ndarray, ConstraintArrays]:
-    """Points (n, 2), their blocks (n,) and the arrays of all links; point rows start at ``first_row``."""
+    """Points (n, dim), their blocks (n,) and the arrays of all links; point rows start at ``first_row``."""
     pts: list[np.ndarray] = []
     owners: list[int] = []
 
@@ -165,7 +167,7 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
     sa = np.array([add(s.block_a, s.point_a) for s in springs], dtype=np.int64)
     sb = np.array([add(s.block_b, s.point_b) for s in springs], dtype=np.int64)
     pr = np.array([add(p.block, p.point) for p in prescribed], dtype=np.int64)
-    sep = np.array([np.asarray(s.point_a, float) - np.asarray(s.point_b, float) for s in springs]).reshape(-1, 2)
+    sep = np.array([np.asarray(s.point_a, float) - np.asarray(s.point_b, float) for s in springs]).reshape(-1, dim)
     rest = np.array([np.linalg.norm(sep[i]) if s.rest_length is None else s.rest_length
                      for i, s in enumerate(springs)], dtype=float)
     orders = [("displacement", "velocity", "acceleration").index(p.quantity) for p in prescribed]
@@ -176,6 +178,7 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
             keys.append((id(p.history), order))
             sources.append((p.history, order))
     links = ConstraintArrays(
+        dim=dim,
         hinge_rows_a=ha, hinge_rows_b=hb,
         hinge_block_a=np.array([h.block_a for h in hinges], dtype=np.int64),
         hinge_block_b=np.array([h.block_b for h in hinges], dtype=np.int64),
@@ -188,7 +191,7 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
         spring_offset=np.where(np.array([s.kind == "offset" for s in springs], bool)[:, None], sep, 0.0),
         spring_axial=np.array([s.kind == "axial" for s in springs], dtype=bool),
         prescribed_rows=pr,
-        prescribed_mask=np.array([p.components for p in prescribed], dtype=bool).reshape(-1, 2),
+        prescribed_mask=np.array([p.components for p in prescribed], dtype=bool).reshape(-1, dim),
         prescribed_order=np.array(orders, dtype=np.int64),
         prescribed_multiplier=np.array([p.by == "multiplier" for p in prescribed], dtype=bool),
         prescribed_stiffness=np.array([np.nan if p.stiffness is None else p.stiffness for p in prescribed],
@@ -199,7 +202,7 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
                                    dtype=np.int64),
         base_acceleration=base_acceleration,
     )
-    return np.array(pts, dtype=float).reshape(-1, 2), np.array(owners, dtype=np.int64), links
+    return np.array(pts, dtype=float).reshape(-1, dim), np.array(owners, dtype=np.int64), links
 
 
 def links_to_flat(links: ConstraintArrays) -> tuple[dict[str, np.ndarray], dict[str, object]]:
@@ -227,6 +230,6 @@ def links_from_flat(arrays: dict[str, np.ndarray], meta: dict) -> ConstraintArra
     sources = tuple((hists[i], int(order[np.flatnonzero(source == i)[0]])) for i in range(len(hists)))
     base = meta["base_acceleration"]
     kwargs = {name: np.asarray(value) for name, value in arrays.items()}
-    return ConstraintArrays(**kwargs, hinge_names=tuple(meta["hinge_names"]),
+    return ConstraintArrays(dim=kwargs["prescribed_mask"].shape[1], **kwargs, hinge_names=tuple(meta["hinge_names"]),
                             prescribed_histories=tuple(hists[i] for i in source), prescribed_sources=sources,
                             base_acceleration=None if base is None else MotionHistory.from_json(base))

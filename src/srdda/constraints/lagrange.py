@@ -24,13 +24,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..term import LEDGER, StepContext, Term
 from .data import ConstraintArrays
 
 if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
-    from ..simulation import StepContext
+    from ..state import State
 
-__all__ = ["LagrangeTerm", "prescribed_target"]
+__all__ = ["LagrangeTerm", "prescribed_target", "hinge_forces"]
 
 
 def prescribed_target(links: ConstraintArrays, initial_points: np.ndarray, t: float) -> np.ndarray:
@@ -38,14 +39,21 @@ def prescribed_target(links: ConstraintArrays, initial_points: np.ndarray, t: fl
     return initial_points[links.prescribed_rows] + links.prescribed_displacement(t)
 
 
-class LagrangeTerm:
-    """Hinges, pins and multiplier-driven points as constraint rows of each step."""
+def hinge_forces(links: ConstraintArrays, multipliers: np.ndarray) -> np.ndarray:
+    """Force (n_hinges, dim) on the first point of every hinge or pin (N per m thickness in 2D)."""
+    return -np.asarray(multipliers)[: links.n_hinges * links.dim].reshape(links.n_hinges, links.dim)
 
-    cuts_step = False  # linear in the step: converged after one solve
+
+class LagrangeTerm(Term):
+    """Hinges, pins and multiplier-driven points as constraint rows of each step (linear: one solve)."""
 
     def __init__(self, links: ConstraintArrays) -> None:
         self.links = links
         self.driven = np.flatnonzero(links.prescribed_multiplier)
+
+    @property
+    def at_points(self) -> bool:
+        return True
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         links, arrays, points = self.links, ctx.arrays, ctx.state.points
@@ -67,5 +75,18 @@ class LagrangeTerm:
             system.add_point_constraints(blocks, t, np.full(len(rows), -1), None, target - points[rows],
                                          links.prescribed_mask[self.driven])
 
-    def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
-        return True
+    def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
+        """Hinge and pin forces (-μ·Δx_rel: zero for an exactly kept hinge); drivers (-μ·Δx)."""
+        links = self.links
+        dx = new.points - ctx.state.points
+        out = np.zeros(len(LEDGER))
+        nh, dim = links.n_hinges, links.dim
+        if nh:
+            mu = np.asarray(multipliers[: nh * dim]).reshape(nh, dim)
+            rel = dx[links.hinge_rows_a] - np.where((links.hinge_block_b >= 0)[:, None], dx[links.hinge_rows_b], 0.0)
+            out[LEDGER.index("work_constraints")] -= float(np.sum(mu * rel))
+        if len(self.driven):
+            mask = links.prescribed_mask[self.driven]
+            mu = np.asarray(multipliers[nh * dim: nh * dim + int(mask.sum())])
+            out[LEDGER.index("work_prescribed")] -= float(np.sum(mu * dx[links.prescribed_rows[self.driven]][mask]))
+        return out

@@ -23,14 +23,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..assembly.system import PenaltyPairs, add_penalty_pairs
+from ..term import LEDGER, StepContext, Term
 from .data import ConstraintArrays
 from .lagrange import prescribed_target
 
 if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
-    from ..simulation import StepContext
+    from ..model import ModelArrays
+    from ..state import State
 
-__all__ = ["PrescribedPenaltyTerm", "BaseAccelerationTerm", "penalty_stiffness", "prescribed_penalty_energy"]
+__all__ = ["PrescribedPenaltyTerm", "BaseAccelerationTerm", "penalty_stiffness"]
 
 
 def penalty_stiffness(links: ConstraintArrays, penalty: float) -> np.ndarray:
@@ -38,52 +40,67 @@ def penalty_stiffness(links: ConstraintArrays, penalty: float) -> np.ndarray:
     return np.where(np.isnan(links.prescribed_stiffness), penalty, links.prescribed_stiffness)
 
 
-def prescribed_penalty_energy(links: ConstraintArrays, initial_points: np.ndarray, points: np.ndarray,
-                              t: float, penalty: float) -> float:
-    """Energy ½p|gap|² of the penalty-driven points at time t (prescribed components only)."""
-    pen = ~links.prescribed_multiplier
-    if not np.any(pen):
-        return 0.0
-    gap = (points[links.prescribed_rows] - prescribed_target(links, initial_points, t)) * links.prescribed_mask
-    k = penalty_stiffness(links, penalty)
-    return 0.5 * float(np.sum(k[pen] * np.sum(gap[pen] ** 2, axis=1)))
-
-
-class PrescribedPenaltyTerm:
+class PrescribedPenaltyTerm(Term):
     """Points driven by penalty springs to their moving targets."""
 
-    cuts_step = False  # linear in the step: converged after one solve
+    energy_kind = "spring"
 
-    def __init__(self, links: ConstraintArrays) -> None:
+    def __init__(self, links: ConstraintArrays, penalty: float) -> None:
         self.links = links
         self.pen = np.flatnonzero(~links.prescribed_multiplier)
+        self.stiffness = penalty_stiffness(links, penalty)[self.pen]
 
-    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
-        links = self.links
-        rows = links.prescribed_rows[self.pen]
-        blocks = ctx.arrays.point_block[rows]
-        mask = links.prescribed_mask[self.pen].astype(float)
-        target = prescribed_target(links, ctx.arrays.points, ctx.t_load)[self.pen]
-        t = ctx.shape_at(blocks, ctx.state.points[rows]) * mask[:, :, None]
-        gap = (ctx.state.points[rows] - target) * mask
-        k = penalty_stiffness(links, ctx.penalty)[self.pen]
-        add_penalty_pairs(system, PenaltyPairs(blocks, t, np.full(len(rows), -1), None, gap, k), ctx.coeffs.c_p)
-
-    def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
+    @property
+    def at_points(self) -> bool:
         return True
 
+    def _gap(self, initial_points: np.ndarray, points: np.ndarray, t: float) -> np.ndarray:
+        links = self.links
+        rows = links.prescribed_rows[self.pen]
+        target = prescribed_target(links, initial_points, t)[self.pen]
+        return (points[rows] - target) * links.prescribed_mask[self.pen]
 
-class BaseAccelerationTerm:
-    """Body force -ρ·A·a_g(t) on the translation of every block."""
+    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
+        rows = self.links.prescribed_rows[self.pen]
+        blocks = ctx.arrays.point_block[rows]
+        mask = self.links.prescribed_mask[self.pen].astype(float)
+        t = ctx.shape_at(blocks, ctx.state.points[rows]) * mask[:, :, None]
+        gap = self._gap(ctx.arrays.points, ctx.state.points, ctx.t_load)
+        add_penalty_pairs(system, PenaltyPairs(blocks, t, np.full(len(rows), -1), None, gap, self.stiffness),
+                          ctx.coeffs.c_p)
 
-    cuts_step = False  # linear in the step: converged after one solve
+    def energy(self, arrays: ModelArrays, state: State) -> float:
+        """½p|gap|² in the prescribed components."""
+        gap = self._gap(arrays.points, state.points, state.time)
+        return 0.5 * float(np.sum(self.stiffness * np.sum(gap**2, axis=1)))
+
+    def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
+        """Work of the moving anchors on their springs: -p·g_mid·Δx_target, g_mid the mean gap."""
+        links, pen = self.links, self.pen
+        a0 = prescribed_target(links, ctx.arrays.points, ctx.state.time)[pen]
+        a1 = prescribed_target(links, ctx.arrays.points, new.time)[pen]
+        rows = links.prescribed_rows[pen]
+        g_mid = 0.5 * ((ctx.state.points[rows] - a0) + (new.points[rows] - a1)) * links.prescribed_mask[pen]
+        out = np.zeros(len(LEDGER))
+        out[LEDGER.index("work_prescribed")] -= float(np.sum(self.stiffness[:, None] * g_mid * (a1 - a0)))
+        return out
+
+
+class BaseAccelerationTerm(Term):
+    """Body force -ρ·V_b·a_g(t) on the translation of every block; its work goes to ``work_loads``."""
+
+    same_every_solve = True
 
     def __init__(self, links: ConstraintArrays) -> None:
         self.history = links.base_acceleration
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
-        mass = ctx.arrays.density * ctx.state.moments.area
-        system.rhs[:, :2] -= mass[:, None] * self.history(ctx.t_load)
+        mass = ctx.arrays.density * ctx.state.moments.volume
+        system.rhs[:, ctx.block_type.translation] -= mass[:, None] * self.history(ctx.t_load)
 
-    def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
-        return True
+    def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
+        mass = ctx.arrays.density * ctx.state.moments.volume
+        out = np.zeros(len(LEDGER))
+        shift = dd[:, ctx.block_type.translation]
+        out[LEDGER.index("work_loads")] -= float(np.sum(mass[:, None] * self.history(ctx.t_load)[None, :] * shift))
+        return out

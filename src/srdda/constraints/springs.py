@@ -1,18 +1,25 @@
-"""Linear springs between two block points, with an optional dashpot.
+"""Point springs: fixed points, zero-length point springs and linear springs with dashpots.
 
-Axial spring (``kind="axial"``): energy ½k(ℓ - ℓ0)², ℓ = |x_a - x_b|. It is
-linearised about the configuration at t like every DDA spring (Shi 1988): the
-stiffness k·n nᵀ along the unit direction n plus the geometric stiffness
-(N/ℓ)(I - n nᵀ) of the current force N = k(ℓ - ℓ0) (kept only when N ≥ 0, in
-tension, so the step matrix stays positive definite), force -N n.
-Offset spring (``kind="offset"``): energy ½k|x_a - x_b - r0|², linear in the
-relative displacement (the DDA point spring when r0 = 0).
-Dashpot: force c·Δx_rel/Δt (the mean relative velocity over the step, along
-n for an axial spring), matrix (c/Δt)·TᵀT; it dissipates c|Δx_rel|²/Δt per
-step, which the energy ledger records.
+All three are penalty springs between two block points (or a block point and
+the ground), added by one route (:func:`srdda.assembly.system.add_penalty_pairs`)
+and with one energy:
 
-Both use ``ctx.shape_at`` (T at t or the secant T_sec) and the scheme's
-penalty weight c_p, like the other penalty-type terms.
+* fixed point: energy ½k|x - x(0)|², a point pulled back to where it started
+  (k: the point's stiffness, else the run's penalty; Shi 1988);
+* point spring: ½k|x_a - x_b|², two points tied together (Shi's point spring);
+* axial spring (``kind="axial"``): ½k(ℓ - ℓ0)², ℓ = |x_a - x_b|, linearised
+  about the configuration at t like every DDA spring: stiffness k·n nᵀ along the
+  unit direction n plus the geometric stiffness (N/ℓ)(I - n nᵀ) of the current
+  force N = k(ℓ - ℓ0) (kept only in tension, N ≥ 0, so the step matrix stays
+  positive definite);
+* offset spring (``kind="offset"``): ½k|x_a - x_b - r0|², linear in the
+  relative displacement;
+* dashpot: force c·Δx_rel/Δt (the mean relative velocity over the step, along
+  n for an axial spring), matrix (c/Δt)·TᵀT; it dissipates c|Δx_rel|²/Δt per
+  step, which the energy ledger records.
+
+Shape functions are ``ctx.shape_at`` (T at t or the secant T_sec), with the
+scheme's penalty weight c_p.
 """
 from __future__ import annotations
 
@@ -21,43 +28,80 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..assembly.system import PenaltyPairs, add_penalty_pairs
+from ..term import LEDGER, StepContext, Term
 from .data import ConstraintArrays
 
 if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
-    from ..simulation import StepContext
+    from ..model import ModelArrays
+    from ..state import State
 
-__all__ = ["SpringTerm", "spring_geometry", "spring_energy"]
+__all__ = ["SpringTerm", "spring_geometry", "spring_energy", "fixed_point_stiffness"]
 
 
 def spring_geometry(links: ConstraintArrays, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Separation d = x_a - x_b (n, 2), length ℓ (n,) and unit direction n (n, 2) of every spring."""
+    """Separation d = x_a - x_b (n, dim), length ℓ (n,) and unit direction n (n, dim) of every spring."""
     d = points[links.spring_rows_a] - points[links.spring_rows_b]
     length = np.linalg.norm(d, axis=1)
     unit = d / np.where(length > 0, length, 1.0)[:, None]
     return d, length, unit
 
 
-def spring_energy(links: ConstraintArrays, points: np.ndarray) -> float:
-    """Strain energy of all springs (J per m thickness)."""
-    if not len(links.spring_rows_a):
-        return 0.0
-    d, length, _ = spring_geometry(links, points)
-    stretch = np.where(links.spring_axial, length - links.spring_rest,
-                       np.linalg.norm(d - links.spring_offset, axis=1))
-    return 0.5 * float(np.sum(links.spring_stiffness * stretch**2))
+def fixed_point_stiffness(arrays: ModelArrays, penalty: float) -> np.ndarray:
+    """Stiffness (nf,) of every fixed point: its own, else the run's penalty."""
+    return np.where(np.isnan(arrays.fixed_stiffness), penalty, arrays.fixed_stiffness)
 
 
-class SpringTerm:
-    """Adds every spring and dashpot to the step's system."""
+def spring_energy(arrays: ModelArrays, points: np.ndarray, penalty: float) -> float:
+    """Strain energy of the fixed points, point springs and springs at ``points``."""
+    energy = 0.0
+    fr = arrays.fixed_rows
+    if len(fr):
+        k = fixed_point_stiffness(arrays, penalty)
+        energy += 0.5 * float(np.sum(k * np.sum((points[fr] - arrays.points[fr]) ** 2, axis=1)))
+    if len(arrays.spring_rows_a):
+        gap = points[arrays.spring_rows_a] - points[arrays.spring_rows_b]
+        energy += 0.5 * float(np.sum(arrays.spring_stiffness * np.sum(gap**2, axis=1)))
+    links = arrays.links
+    if len(links.spring_rows_a):
+        d, length, _ = spring_geometry(links, points)
+        stretch = np.where(links.spring_axial, length - links.spring_rest,
+                           np.linalg.norm(d - links.spring_offset, axis=1))
+        energy += 0.5 * float(np.sum(links.spring_stiffness * stretch**2))
+    return energy
 
-    cuts_step = False  # linear in the step: converged after one solve
 
-    def __init__(self, links: ConstraintArrays) -> None:
-        self.links = links
+class SpringTerm(Term):
+    """Every fixed point, point spring, spring and dashpot of the model."""
+
+    energy_kind = "spring"
+
+    def __init__(self, penalty: float) -> None:
+        self.penalty = penalty  # stiffness of fixed points that give none
+
+    @property
+    def at_points(self) -> bool:
+        return True
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
-        links = self.links
+        arrays, points, c_p = ctx.arrays, ctx.state.points, ctx.coeffs.c_p
+        pb = arrays.point_block
+        fr = arrays.fixed_rows
+        if len(fr):
+            gap = points[fr] - arrays.points[fr]  # pull back to the original position
+            add_penalty_pairs(system, PenaltyPairs(pb[fr], ctx.shape_at(pb[fr], points[fr]), np.full(len(fr), -1),
+                                                   None, gap, fixed_point_stiffness(arrays, self.penalty)), c_p)
+        ra, rb = arrays.spring_rows_a, arrays.spring_rows_b
+        if len(ra):
+            add_penalty_pairs(system, PenaltyPairs(pb[ra], ctx.shape_at(pb[ra], points[ra]), pb[rb],
+                                                   ctx.shape_at(pb[rb], points[rb]), points[ra] - points[rb],
+                                                   arrays.spring_stiffness), c_p)
+        if len(arrays.links.spring_rows_a):
+            self._add_springs(system, ctx)
+
+    @staticmethod
+    def _add_springs(system: BlockSystem, ctx: StepContext) -> None:
+        links = ctx.arrays.links
         ra, rb = links.spring_rows_a, links.spring_rows_b
         points = ctx.state.points
         ba, bb = ctx.arrays.point_block[ra], ctx.arrays.point_block[rb]
@@ -66,23 +110,34 @@ class SpringTerm:
         k, c = links.spring_stiffness, links.spring_damping
         axial = links.spring_axial
         along = np.einsum("ni,nj->nij", unit, unit)
-        across = np.eye(2) - along
+        eye = np.broadcast_to(np.eye(unit.shape[1]), along.shape)
+        across = eye - along
         force = k * (length - links.spring_rest)
         geometric = np.where(axial & (force > 0), force / np.where(length > 0, length, 1.0), 0.0)
-        eye = np.broadcast_to(np.eye(2), along.shape)
-        # axial: k along n with gap (ℓ - ℓ0) n, geometric stiffness across n; offset: k in both directions
+        # axial: k along n with gap (ℓ - ℓ0) n, geometric stiffness across n; offset: k in every direction
         proj = np.where(axial[:, None, None], along, eye)
         gap = np.where(axial[:, None], (length - links.spring_rest)[:, None] * unit, d - links.spring_offset)
-        self._add(system, ba, proj @ ta, bb, proj @ tb, gap, k, ctx.coeffs.c_p)
+        c_p = ctx.coeffs.c_p
+        add_penalty_pairs(system, PenaltyPairs(ba, proj @ ta, bb, proj @ tb, gap, k), c_p)
         if np.any(geometric > 0):
-            self._add(system, ba, across @ ta, bb, across @ tb, np.zeros_like(gap), geometric, ctx.coeffs.c_p)
+            add_penalty_pairs(system, PenaltyPairs(ba, across @ ta, bb, across @ tb, np.zeros_like(gap), geometric),
+                              c_p)
         if np.any(c > 0):
-            self._add(system, ba, proj @ ta, bb, proj @ tb, np.zeros_like(gap), c / ctx.dt, 1.0)
+            add_penalty_pairs(system, PenaltyPairs(ba, proj @ ta, bb, proj @ tb, np.zeros_like(gap), c / ctx.dt),
+                              1.0)
 
-    @staticmethod
-    def _add(system: BlockSystem, ba: np.ndarray, ta: np.ndarray, bb: np.ndarray, tb: np.ndarray,
-             gap: np.ndarray, k: np.ndarray, factor: float) -> None:
-        add_penalty_pairs(system, PenaltyPairs(ba, ta, bb, tb, gap, k), factor)
+    def energy(self, arrays: ModelArrays, state: State) -> float:
+        return spring_energy(arrays, state.points, self.penalty)
 
-    def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
-        return True
+    def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
+        links = ctx.arrays.links
+        if not (len(links.spring_rows_a) and np.any(links.spring_damping > 0)):
+            return None
+        dx = new.points - ctx.state.points
+        rel = dx[links.spring_rows_a] - dx[links.spring_rows_b]
+        _, _, unit = spring_geometry(links, ctx.state.points)
+        along = np.einsum("ni,ni->n", rel, unit)
+        sq = np.where(links.spring_axial, along**2, np.sum(rel**2, axis=1))
+        out = np.zeros(len(LEDGER))
+        out[LEDGER.index("dissipated")] = float(np.sum(links.spring_damping * sq) / ctx.dt)
+        return out

@@ -49,6 +49,11 @@ def previous_vertex_index(block_ptr: np.ndarray) -> np.ndarray:
     return prv
 
 
+# columns of a detected-contact row [vertex, edge start, kind]
+FOUND_VERTEX, FOUND_EDGE, FOUND_KIND = range(3)
+FOUND_FIELDS = 3
+
+
 @njit(cache=True)
 def _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol):
     """Shi's angle criterion: convex vertex v whose two edges stay outside the line of normal n."""

@@ -1,32 +1,34 @@
-"""Contacts as a :class:`srdda.simulation.StepTerm`, and their state between steps.
+"""Contacts as a step term (:class:`ContactTerm`), and their state between steps.
 
-Per step: :meth:`ContactModel.prepare` detects contacts in the configuration at
-t (broad + narrow phase), carries over what persisting contacts knew
-(:class:`ContactSet` on ``State.contacts``) and returns a :class:`ContactTerm`
-for :func:`srdda.simulation.advance`. The term adds the springs and friction
-forces of the assumed states; after each solve it runs the open-close rules and
-asks for another solve while a state changes. :meth:`ContactTerm.commit` gives
-the :class:`ContactSet` to store on the accepted state.
+Per step attempt: :meth:`ContactModel.prepare` detects contacts in the
+configuration at t (broad + narrow phase), carries over what persisting
+contacts knew (:class:`ContactSet` on ``State.contacts``) and returns the
+step's :class:`ContactStep`, which adds the springs and friction forces of the
+assumed states; after each solve it runs the open-close rules and asks for
+another solve while a state changes. After the update the term cuts a step
+whose vertices moved more than g2·w0 or penetrated too deep, and commits the
+:class:`ContactSet` of an accepted step to its state.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
-from ..model import ModelArrays
+from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays
+from ..term import StepContext, StepCut, Term
 from .broadphase import block_boxes, candidate_pairs
-from .narrowphase import detect_contacts, previous_vertex_index
+from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts, previous_vertex_index
 from .openclose import LOCKED, OPEN, SLIDING, next_states
 from .springs import ContactGeometry, bond_length, contact_geometry
 from .transfer import contact_keys, match_previous
 
-if TYPE_CHECKING:  # simulation imports this module
-    from ..simulation import StepContext
+if TYPE_CHECKING:
+    from ..state import State
 
-__all__ = ["ContactParameters", "ContactSet", "ContactTerm", "ContactModel"]
+__all__ = ["ContactParameters", "ContactSet", "ContactStep", "ContactModel", "ContactTerm"]
 
 
 @dataclass(frozen=True)
@@ -75,10 +77,8 @@ class ContactSet:
         return float(max(pen.max(), 0.0)) if len(pen) else 0.0
 
 
-class ContactTerm:
-    """The contacts of one step: springs, friction and the open-close iteration."""
-
-    cuts_step = True  # an open-close that does not settle cuts Δt (simulation.StepControl)
+class ContactStep:
+    """The contacts of one step attempt: springs, friction and the open-close iteration."""
 
     def __init__(self, geometry: ContactGeometry, found: np.ndarray, params: ContactParameters, state: np.ndarray,
                  sign: np.ndarray, reference: np.ndarray, bonded: np.ndarray, normal_force: np.ndarray,
@@ -91,9 +91,9 @@ class ContactTerm:
         self.reference = reference
         self.bonded = bonded
         self.normal_force = normal_force
-        self.tan_phi = np.tan(joint[:, 0])
-        self.cohesion_force = np.where(bonded, joint[:, 1] * length, 0.0)
-        self.tension_force = np.where(bonded, joint[:, 2] * length, 0.0)
+        self.tan_phi = np.tan(joint[:, JOINT_FRICTION])
+        self.cohesion_force = np.where(bonded, joint[:, JOINT_COHESION] * length, 0.0)
+        self.tension_force = np.where(bonded, joint[:, JOINT_TENSION] * length, 0.0)
         self.shear0 = geometry.shear(reference)
         self.gap = geometry.gap.copy()
         self.shear = self.shear0.copy()
@@ -107,7 +107,6 @@ class ContactTerm:
     def __len__(self) -> int:
         return len(self.state)
 
-    # -- StepTerm -----------------------------------------------------------
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         g = self.geometry
         a, b = g.vertex_block, g.edge_block
@@ -203,9 +202,10 @@ class ContactTerm:
         locked = self.state == LOCKED
         energy = 0.5 * p.normal_stiffness * float(np.sum(self.gap[closed] ** 2)) \
             + 0.5 * p.shear_stiffness * float(np.sum(self.shear[locked] ** 2))
-        return ContactSet(self.found[:, 0], self.found[:, 1], self.found[:, 2], self.state.copy(), self.sign.copy(),
-                          self.reference.copy(), self.bonded & locked, self.normal_force.copy(), self.gap.copy(),
-                          np.where(locked, self.shear, 0.0), energy)
+        found = self.found
+        return ContactSet(found[:, FOUND_VERTEX], found[:, FOUND_EDGE], found[:, FOUND_KIND], self.state.copy(),
+                          self.sign.copy(), self.reference.copy(), self.bonded & locked, self.normal_force.copy(),
+                          self.gap.copy(), np.where(locked, self.shear, 0.0), energy)
 
     @property
     def max_penetration(self) -> float:
@@ -230,20 +230,21 @@ class ContactModel:
         boxes = block_boxes(vertices, arr.block_ptr)
         pairs = candidate_pairs(boxes, self.params.distance, self.movable)
         if len(pairs) == 0:
-            return np.empty((0, 3), dtype=np.int64)
+            return np.empty((0, FOUND_FIELDS), dtype=np.int64)
         return detect_contacts(vertices, arr.block_ptr, arr.vertex_block, arr.next_vertex, self.previous_vertex,
                                pairs, boxes, self.params.distance, self.sin_tol, self.params.max_penetration)
 
-    def prepare(self, vertices: np.ndarray, previous: ContactSet | None, first_step: bool) -> ContactTerm | None:
+    def prepare(self, vertices: np.ndarray, previous: ContactSet | None, first_step: bool) -> ContactStep | None:
         """The term of the step starting at ``vertices``; None when no contact is near."""
         found = self.detect(vertices)
         if len(found) == 0:
             return None
         arr = self.arrays
-        geom = contact_geometry(vertices, arr.vertex_block, arr.next_vertex, found[:, 0], found[:, 1])
+        vertex, edge = found[:, FOUND_VERTEX], found[:, FOUND_EDGE]
+        geom = contact_geometry(vertices, arr.vertex_block, arr.next_vertex, vertex, edge)
         previous = previous if previous is not None else ContactSet.empty()
         nv = len(vertices)
-        old = match_previous(contact_keys(found[:, 0], found[:, 1], nv),
+        old = match_previous(contact_keys(vertex, edge, nv),
                              contact_keys(previous.vertex, previous.edge, nv))
         kept = old >= 0
         src = old[kept]
@@ -263,10 +264,62 @@ class ContactModel:
         bonded[kept] = previous.bonded[src]
         normal_force = self.params.normal_stiffness * np.maximum(-geom.gap, 0.0)
         normal_force[kept] = previous.normal_force[src]
-        joint_index = arr.edge_joint[found[:, 1]]
+        joint_index = arr.edge_joint[edge]
         by_materials = arr.joint_by_materials[arr.block_material[geom.vertex_block],
                                               arr.block_material[geom.edge_block]]
         joint = arr.joint_properties[np.where(joint_index >= 0, joint_index, by_materials)]
-        length = bond_length(vertices, arr.next_vertex, self.previous_vertex, found[:, 0], geom.tangent,
+        length = bond_length(vertices, arr.next_vertex, self.previous_vertex, vertex, geom.tangent,
                              self.cos_parallel)
-        return ContactTerm(geom, found, self.params, state, sign, reference, bonded, normal_force, joint, length)
+        return ContactStep(geom, found, self.params, state, sign, reference, bonded, normal_force, joint, length)
+
+
+class ContactTerm(Term):
+    """Block contacts as a step term (module doc): open-close iteration, step cuts, contact energy."""
+
+    energy_kind = "contact"
+    cuts_step = True  # an open-close that does not settle within ``max_iterations`` solves cuts Δt
+
+    def __init__(self, model: ContactModel, max_iterations: int, max_displacement: float, dt_max: float) -> None:
+        self.model = model
+        self.max_iterations = max_iterations
+        self.max_displacement = max_displacement  # g2·w0: how far a vertex may move in one step
+        self.dt_max = dt_max  # the run's Δt, which the step grows back to
+        self.step: ContactStep | None = None
+
+    def begin(self, ctx: StepContext) -> None:
+        state = ctx.state
+        self.step = self.model.prepare(state.vertices, state.contacts, state.step == 0)
+
+    @property
+    def at_points(self) -> bool:
+        return self.step is not None
+
+    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
+        if self.step is not None:
+            self.step.add_to(system, ctx)
+
+    def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
+        return self.step is None or self.step.converged(dd, ctx)
+
+    def pending(self) -> str:
+        return "open-close did not converge"
+
+    def review(self, ctx: StepContext, new: State) -> StepCut | float | None:
+        """Cut a step whose vertices moved more than g2·w0 or that penetrated too deep; else grow Δt."""
+        moved = float(np.max(np.hypot.reduce(new.vertices - ctx.state.vertices, axis=1)))
+        if moved > self.max_displacement:
+            return StepCut(f"a vertex moved {moved:.3g} m > g2·w0 = {self.max_displacement:.3g} m",
+                           min(0.9, 0.9 * self.max_displacement / moved))
+        step = self.step
+        if step is not None and step.max_penetration > step.params.max_penetration:
+            return StepCut(f"penetration {step.max_penetration:.3g} m > {step.params.max_penetration:.3g} m "
+                           "(raise the contact penalty)", 0.0)
+        # grow Δt back towards the set value, at most ×1.5, aiming at 90% of g2·w0 for the next step
+        growth = 1.5 if moved == 0 else min(1.5, 0.9 * self.max_displacement / moved)
+        return min(self.dt_max, ctx.dt * growth)
+
+    def commit(self, new: State) -> State:
+        return replace(new, contacts=self.step.commit() if self.step is not None else None)
+
+    def energy(self, arrays: ModelArrays, state: State) -> float:
+        return state.contacts.energy if state.contacts is not None else 0.0

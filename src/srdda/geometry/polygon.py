@@ -42,6 +42,16 @@ class BlockMoments:
     syy: np.ndarray
     sxy: np.ndarray
 
+    @property
+    def volume(self) -> np.ndarray:
+        """Volume per metre of thickness (m³/m): the area; the name the dimension-free code uses."""
+        return self.area
+
+    @property
+    def second(self) -> np.ndarray:
+        """Central second moments as tensors (nb, 2, 2): ∫X_i X_j dA."""
+        return np.stack([np.stack([self.sxx, self.sxy], -1), np.stack([self.sxy, self.syy], -1)], -2)
+
 
 def next_vertex_index(block_ptr: np.ndarray) -> np.ndarray:
     """Index of the next vertex (cyclically within its block) for every vertex."""

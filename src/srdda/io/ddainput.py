@@ -20,7 +20,7 @@ import shapely
 
 from ..geometry.cutting import NO_JOINT, BlockCut, CuttingError, cut_blocks
 from ..model import JointMaterial, Material, Model, ModelError
-from ..simulation import RunSettings
+from ..settings import RunSettings
 
 __all__ = ["DDAInput", "DDAInputError", "domain_scale"]
 

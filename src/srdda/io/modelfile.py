@@ -6,6 +6,7 @@ the field (e.g. ``blocks[2].vertices``) and the problem.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from pathlib import Path
@@ -18,8 +19,8 @@ from pydantic import ValidationError
 from ..history import HistoryError, MotionHistory
 from ..geometry.polygon import PolygonError
 from ..model import JointMaterial, Load, Material, Model, ModelError
-from ..simulation import RunSettings
-from .schema import CONTACT_RUN_FIELDS, HistorySection, ModelFile
+from ..settings import RunSettings
+from .schema import HistorySection, ModelFile
 
 __all__ = ["ModelFileError", "load_model", "model_from_dict", "save_model", "model_to_dict"]
 
@@ -44,7 +45,7 @@ def _format_validation(exc: ValidationError, source: str) -> str:
     lines = [f"{source}: invalid model file"]
     for err in exc.errors():
         msg = err["msg"]
-        if err["type"] == "extra_forbidden":
+        if err["type"] in ("extra_forbidden", "unexpected_keyword_argument"):
             msg = "unknown field (check the spelling)"
         elif err["type"] == "missing":
             msg = "required field is missing"
@@ -119,12 +120,7 @@ def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
         _add_links(model, spec, names, n, where)
     except ModelError as exc:
         raise ModelFileError(f"{source}: {exc}") from None
-    r = spec.run
-    settings = RunSettings(dt=r.dt, n_steps=r.steps, method=r.method, rho_inf=r.rho_inf, scheme=r.scheme,
-                           linearization=r.linearization, penalty=r.penalty, solver=r.solver,
-                           record_every=r.record_every, velocity_ratio=r.velocity_ratio,
-                           **{k: getattr(r, k) for k in CONTACT_RUN_FIELDS})
-    return model, settings
+    return model, spec.run
 
 
 def _history(h: HistorySection, where: str) -> MotionHistory:
@@ -216,18 +212,18 @@ def _pt(p: np.ndarray) -> list[float]:
     return [float(p[0]), float(p[1])]
 
 
+def _run_dict(settings: RunSettings) -> dict[str, Any]:
+    """The ``[run]`` table: every field that is set (None fields are left out, ``n_steps`` is ``steps``)."""
+    fields = {k: v for k, v in dataclasses.asdict(settings).items() if v is not None}
+    if "n_steps" in fields:
+        fields["steps"] = fields.pop("n_steps")
+    return fields
+
+
 def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[str, Any]:
     """The model-file dictionary of a model (loads given as callables cannot be written)."""
     mats = list(model.materials)
-    run: dict[str, Any] = {"method": settings.method, "dt": settings.dt, "steps": settings.n_steps,
-                           "rho_inf": settings.rho_inf, "penalty": settings.penalty, "solver": settings.solver,
-                           "record_every": settings.record_every, "velocity_ratio": settings.velocity_ratio}
-    defaults = RunSettings(dt=1.0, n_steps=0)
-    run.update({k: getattr(settings, k) for k in CONTACT_RUN_FIELDS if getattr(settings, k) != getattr(defaults, k)})
-    if settings.scheme is not None:
-        run["scheme"] = settings.scheme
-    if settings.linearization is not None:
-        run["linearization"] = settings.linearization
+    run = _run_dict(settings)
     out: dict[str, Any] = {"title": title, "units": "SI", "gravity": list(map(float, model.gravity)), "run": run,
                            "materials": {n: {"density": m.density, "young": m.young, "poisson": m.poisson,
                                              "plane": m.plane} for n, m in model.materials.items()}}

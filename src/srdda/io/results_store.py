@@ -40,10 +40,13 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..constraints import LEDGER
 from ..constraints.data import links_from_flat, links_to_flat
 from ..model import Load, Model, ModelArrays
-from ..simulation import Result, RunSettings, State, energies, measured_points, run
+from ..ledger import ENERGY_NAMES
+from ..results import Result, measured_points
+from ..settings import RunSettings
+from ..simulation import run
+from ..state import State
 from .checkpoint import append_checkpoint, checkpoint_count, read_checkpoint, truncate_checkpoints
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state", "ResultsStore", "ResultsFileError", "StoredResult",
@@ -51,7 +54,6 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state",
 
 FORMAT = "srdda-results"
 FORMAT_VERSION = 1
-ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "contact", "total", *LEDGER, "balance")
 
 ContactProvider = Callable[[ModelArrays, State], Mapping[str, np.ndarray] | None]
 """Hook for contact output: per-contact arrays (first axis = contact) of one state, or None.
@@ -219,7 +221,7 @@ class ResultsStore:
             raise ValueError(f"contact_every must be >= 1, got {self.contact_every}")
 
     # -- Recorder protocol ----------------------------------------------------
-    def record(self, arrays: ModelArrays, state: State, penalty: float, solves: int) -> None:
+    def record(self, arrays: ModelArrays, state: State, solves: int, energy: Mapping[str, float]) -> None:
         """Buffer one recorded step; flush every ``flush_every`` of them."""
         if self._file is None:
             self._open(arrays, state)
@@ -227,11 +229,10 @@ class ResultsStore:
             return
         mom = state.moments
         pos, vel = measured_points(arrays, state)
-        e = energies(arrays, state, penalty)
         row = {"step": np.int64(state.step), "time": np.float64(state.time), "centroid": mom.centroid,
-               "area": mom.area, "rotation": state.rotation, "velocity": state.velocity, "stress": state.stress,
+               "area": mom.volume, "rotation": state.rotation, "velocity": state.velocity, "stress": state.stress,
                "vertices": state.vertices, "measured_position": pos, "measured_velocity": vel,
-               "energy": np.array([e[k] for k in ENERGY_NAMES]), "iterations": np.int64(solves)}
+               "energy": np.array([energy[k] for k in ENERGY_NAMES]), "iterations": np.int64(solves)}
         if arrays.links.n_multipliers:  # constraint forces, one row per step (srdda.constraints)
             row["multipliers"] = state.multipliers
         for name, value in row.items():

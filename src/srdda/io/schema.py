@@ -10,9 +10,10 @@ from typing import Annotated, Literal
 
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
 
-from .units import to_si
+from ..settings import RunSettings
+from ..units import to_si
 
-__all__ = ["ModelFile", "RunSection", "MaterialSection", "BlockSection", "PointRef", "FixedPointSection",
+__all__ = ["ModelFile", "MaterialSection", "BlockSection", "PointRef", "FixedPointSection",
            "PointLoadSection", "PointSpringSection", "MeasuredPointSection", "JointMaterialSection",
            "HingeSection", "PinSection", "SpringSection", "HistorySection", "PrescribedMotionSection"]
 
@@ -40,42 +41,6 @@ Table = Annotated[list[tuple[Time, float, float]], AfterValidator(_strictly_incr
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class RunSection(_Strict):
-    """How to run: method, time step (s), number of steps, scheme parameters."""
-
-    method: Literal["dda0", "dda1", "srdda"] = "srdda"
-    dt: Time = Field(gt=0)
-    steps: int = Field(ge=0)
-    rho_inf: float = Field(1.0, ge=0, le=1)
-    scheme: Literal["shi", "paper", "chung-hulbert"] | None = None
-    linearization: Literal["start", "secant"] | None = None
-    penalty: Stiffness = Field(1e9, gt=0)
-    solver: Literal["auto", "dense", "superlu", "cholmod", "pardiso"] = "auto"
-    record_every: int = Field(1, ge=1)
-    velocity_ratio: float = Field(1.0, ge=0, le=1)  # Shi's k01: 0 = static analysis
-    # contacts and step control (docs/contacts.md); defaults as in RunSettings
-    contacts: bool = True
-    contact_penalty: Stiffness | None = Field(None, gt=0)
-    auto_penalty: float | None = Field(None, gt=0)
-    shear_ratio: float = Field(0.4, gt=0)
-    max_displacement_ratio: float = Field(0.01, gt=0)
-    contact_distance_factor: float = Field(2.5, gt=0)
-    contact_angle_tolerance: Angle = Field(3.0, ge=0, lt=45)
-    penetration_fraction: float = Field(0.4, gt=0)
-    open_close_max_iterations: int = Field(20, ge=1)
-    friction_tolerance: float = Field(1e-3, gt=0)
-    open_close_freeze_after: int = Field(2, ge=1)
-    open_close_settle_after: int = Field(8, ge=1)
-    step_cut_factor: float = Field(1.0 / 3.0, gt=0, lt=1)
-    min_dt: Time | None = Field(None, gt=0)
-
-
-CONTACT_RUN_FIELDS = ("contacts", "contact_penalty", "auto_penalty", "shear_ratio", "max_displacement_ratio",
-                      "contact_distance_factor", "contact_angle_tolerance", "penetration_fraction",
-                      "open_close_max_iterations", "friction_tolerance", "open_close_freeze_after",
-                      "open_close_settle_after", "step_cut_factor", "min_dt")
 
 
 class MaterialSection(_Strict):
@@ -181,7 +146,7 @@ class ModelFile(_Strict):
     title: str = ""
     units: Literal["SI"] = "SI"
     gravity: Point = (0.0, 0.0)
-    run: RunSection
+    run: RunSettings  # the run settings (srdda.settings), validated where they are defined
     materials: dict[str, MaterialSection] = Field(min_length=1)
     joint_materials: dict[str, JointMaterialSection] = {}
     blocks: list[BlockSection] = Field(min_length=1)

@@ -15,7 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from ..model import Model
-from ..simulation import Result, RunSettings
+from ..results import Result
+from ..settings import RunSettings
 
 __all__ = ["Example", "EXAMPLES", "register", "get_example", "examples_dir", "Row"]
 

@@ -37,7 +37,8 @@ from scipy.integrate import solve_ivp
 
 from ..constraints import MotionHistory
 from ..model import Material, Model
-from ..simulation import Result, RunSettings
+from ..results import Result
+from ..settings import RunSettings
 from .registry import Example, Row, register
 
 # The paper's bars and sticks touch only where they are joined (no contacts in 4.3 and 4.4): turn

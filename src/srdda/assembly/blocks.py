@@ -1,0 +1,108 @@
+"""The block terms of a step: inertia, elasticity, initial stress and body force (paper Eq. 60).
+
+Each acts on every block's own unknowns (the diagonal sub-matrices) and is
+written for any block type: translation, rotation and strain unknowns are
+the block type's slices. With the scheme coefficients c (module doc of
+:mod:`srdda.integrators.schemes`):
+
+* inertia: c_m·M on the diagonal, M·(m_v V + m_a A) on the right, M = ρ∫TᵀT;
+* elasticity: c_k·V_b·D on the strain block, V_b·D·(k_v V + k_a A) on the right
+  (the paper's Δt·K·V(t+Δt-αf) term, zero for Shi's scheme);
+* initial stress: -V_b·σ on the strain unknowns;
+* body force: ρ·V_b·g on the translation.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..state import mass_density
+from ..term import StepContext, Term
+
+if TYPE_CHECKING:
+    from ..model import ModelArrays
+    from ..state import State
+    from .system import BlockSystem
+
+__all__ = ["InertiaTerm", "ElasticityTerm", "InitialStressTerm", "BodyForceTerm", "block_terms", "mass_matrices"]
+
+
+def mass_matrices(arrays: ModelArrays, state: State) -> np.ndarray:
+    """M = ρ∫TᵀT (nb, ndof, ndof) of every block in the configuration of ``state``."""
+    mom = state.moments
+    density = mass_density(arrays, mom)
+    return density[:, None, None] * arrays.block_type.mass_matrix(mom.volume, mom.second)
+
+
+class InertiaTerm(Term):
+    """c_m·M Δd = M (m_v V + m_a A) + ...: the inertia of the time scheme."""
+
+    same_every_solve = True
+
+    energy_kind = "kinetic"
+
+    def begin(self, ctx: StepContext) -> None:
+        self.mass = mass_matrices(ctx.arrays, ctx.state)
+        c = ctx.coeffs
+        self.rhs = np.einsum("nij,nj->ni", self.mass, c.m_v * ctx.state.velocity + c.m_a * ctx.state.acceleration)
+
+    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
+        system.diag += ctx.coeffs.c_m * self.mass
+        system.rhs += self.rhs
+
+    def energy(self, arrays: ModelArrays, state: State) -> float:
+        V = state.velocity
+        return 0.5 * float(np.einsum("ni,nij,nj->", V, mass_matrices(arrays, state), V))
+
+
+class ElasticityTerm(Term):
+    """c_k·V_b·D on the strain unknowns (Eq. 60) and the scheme's rate term; strain energy."""
+
+    same_every_solve = True
+
+    energy_kind = "elastic"
+
+    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
+        s = ctx.block_type.strain
+        volume = ctx.state.moments.volume
+        c = ctx.coeffs
+        system.diag[:, s, s] += c.c_k * volume[:, None, None] * ctx.arrays.elasticity
+        if c.k_v or c.k_a:
+            rate = c.k_v * ctx.state.velocity[:, s] + c.k_a * ctx.state.acceleration[:, s]
+            system.rhs[:, s] += volume[:, None] * np.einsum("nij,nj->ni", ctx.arrays.elasticity, rate)
+
+    def energy(self, arrays: ModelArrays, state: State) -> float:
+        ds = state.stress - arrays.stress
+        return 0.5 * float(np.sum(state.moments.volume * np.einsum("ni,nij,nj->n", ds, arrays.compliance, ds)))
+
+
+class InitialStressTerm(Term):
+    """-V_b·σ(t) on the strain unknowns: the stress carried into the step."""
+
+    same_every_solve = True
+
+    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
+        system.rhs[:, ctx.block_type.strain] -= ctx.state.moments.volume[:, None] * ctx.state.stress
+
+
+class BodyForceTerm(Term):
+    """ρ·V_b·g on the translation of every block; gravitational potential energy."""
+
+    same_every_solve = True
+
+    energy_kind = "gravity"
+
+    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
+        mom = ctx.state.moments
+        mass = mass_density(ctx.arrays, mom) * mom.volume
+        system.rhs[:, ctx.block_type.translation] += mass[:, None] * ctx.arrays.gravity
+
+    def energy(self, arrays: ModelArrays, state: State) -> float:
+        mom = state.moments
+        return -float(np.sum(mass_density(arrays, mom) * mom.volume * (mom.centroid @ arrays.gravity)))
+
+
+def block_terms() -> list[Term]:
+    """The terms every block has, in assembly order."""
+    return [InertiaTerm(), ElasticityTerm(), InitialStressTerm(), BodyForceTerm()]

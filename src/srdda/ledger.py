@@ -1,0 +1,45 @@
+"""The energy ledger: stored energies and the work that enters or leaves.
+
+Balance (J per metre of thickness in 2D):
+
+    E(t) = kinetic + gravitational + elastic strain + springs and penalties + contacts
+    E(t) - E(0) = W_loads + W_prescribed + W_constraints - D_dashpots - D_numerical
+
+Every term reports its stored energy (:attr:`srdda.term.Term.energy_kind`)
+and its work per step (:meth:`srdda.term.Term.work`):
+W_loads: point loads and the base-acceleration body force, Σ F(t_load)·Δx with
+Δx the exact displacement; W_prescribed: the drivers of prescribed points,
+-μ·Δx for multiplier rows and -p·g_mid·Δx_target for penalty drivers;
+W_constraints: hinge and pin forces, -μ·(Δx_a - Δx_b), zero for an exactly
+kept constraint (srdda, dda0), not for dda1's post-adjustment; D_dashpots:
+c|Δx_rel|²/Δt per step. D_numerical is what is left: the time scheme's and the
+linearisation's own dissipation or drift, so ``balance`` =
+E - W_loads - W_prescribed - W_constraints + D_dashpots stays at E(0) when it is zero.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+from .term import ENERGY_KINDS, LEDGER, Term
+
+if TYPE_CHECKING:
+    from .model import ModelArrays
+    from .state import State
+
+__all__ = ["ENERGY_NAMES", "energies"]
+
+ENERGY_NAMES = (*ENERGY_KINDS, "total", *LEDGER, "balance")
+
+
+def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[str, float]:
+    """Every stored energy, their total, the cumulative work of the ledger and the balance."""
+    out = dict.fromkeys(ENERGY_KINDS, 0.0)
+    for term in terms:
+        if term.energy_kind is not None:
+            out[term.energy_kind] += term.energy(arrays, state)
+    out["total"] = sum(out[k] for k in ENERGY_KINDS)
+    out.update(zip(LEDGER, map(float, state.ledger)))
+    out["balance"] = out["total"] - out["work_loads"] - out["work_prescribed"] - out["work_constraints"] \
+        + out["dissipated"]
+    return out

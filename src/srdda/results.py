@@ -1,0 +1,100 @@
+"""Where a run's recorded steps go: the :class:`Recorder` interface and the in-memory :class:`Result`.
+
+The run computes each recorded step's energies once (:func:`srdda.ledger.energies`)
+and hands them, with the state, to every recorder: :class:`Result` keeps the
+histories in memory (small runs, the API's return value),
+:class:`srdda.io.results_store.ResultsStore` streams them to an HDF5 file.
+With ``srdda.run(..., keep_history=False)`` the Result keeps only the first and
+the last recorded step, so a long run streamed to a file does not grow in memory.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from .model import ModelArrays
+from .state import State
+
+__all__ = ["Recorder", "Result", "measured_points"]
+
+
+class Recorder(Protocol):
+    """Receives the recorded steps of a run (in memory, to a file, ...)."""
+
+    def record(self, arrays: ModelArrays, state: State, solves: int, energy: Mapping[str, float]) -> None: ...
+
+    def finish(self, status: str, state: State) -> None: ...
+
+
+def measured_points(arrays: ModelArrays, state: State) -> tuple[np.ndarray, np.ndarray]:
+    """Positions and velocities (n, dim) of the measured points."""
+    mr = arrays.measured_rows
+    blocks = arrays.point_block[mr]
+    lever = state.points[mr] - state.moments.centroid[blocks]
+    T = arrays.block_type.shape(lever)
+    return state.points[mr].copy(), np.einsum("nij,nj->ni", T, state.velocity[blocks])
+
+
+_HISTORIES = ("step", "time", "centroid", "area", "rotation", "velocity", "stress", "measured_position",
+              "measured_velocity", "energy", "iterations", "multipliers", "closed_contacts", "max_penetration")
+
+
+@dataclass
+class Result:
+    """Recorded histories of a run (rows = recorded steps) and how it ended; the in-memory recorder.
+
+    ``keep_history=False`` keeps the first and the latest recorded step only.
+    """
+
+    block_names: tuple[str, ...]
+    method: str
+    keep_history: bool = True
+    step: list[int] = field(default_factory=list)
+    time: list[float] = field(default_factory=list)
+    centroid: list[np.ndarray] = field(default_factory=list)
+    area: list[np.ndarray] = field(default_factory=list)  # block volume per metre of thickness in 2D
+    rotation: list[np.ndarray] = field(default_factory=list)
+    velocity: list[np.ndarray] = field(default_factory=list)
+    stress: list[np.ndarray] = field(default_factory=list)
+    measured_position: list[np.ndarray] = field(default_factory=list)
+    measured_velocity: list[np.ndarray] = field(default_factory=list)
+    energy: list[dict[str, float]] = field(default_factory=list)
+    iterations: list[int] = field(default_factory=list)
+    multipliers: list[np.ndarray] = field(default_factory=list)  # μ per step; force on point a = -μ (N/m)
+    closed_contacts: list[int] = field(default_factory=list)  # closed (sliding or locked) contacts
+    max_penetration: list[float] = field(default_factory=list)  # deepest closed contact (m)
+    status: str = "running"
+    final_state: State | None = None
+
+    def array(self, name: str) -> np.ndarray:
+        """A history as one array (first axis = recorded step)."""
+        if name == "energy":
+            keys = self.energy[0].keys() if self.energy else []
+            return np.array([[e[k] for k in keys] for e in self.energy])
+        return np.asarray(getattr(self, name))
+
+    @property
+    def completed(self) -> bool:
+        return self.status == "completed"
+
+    def record(self, arrays: ModelArrays, state: State, solves: int, energy: Mapping[str, float]) -> None:
+        """Append one step's histories (replacing the latest one when the history is not kept)."""
+        if not self.keep_history and len(self.step) == 2:
+            for name in _HISTORIES:
+                getattr(self, name).pop()
+        mom = state.moments
+        contacts = state.contacts
+        pos, vel = measured_points(arrays, state)
+        row = (state.step, state.time, mom.centroid, mom.volume, state.rotation.copy(), state.velocity.copy(),
+               state.stress.copy(), pos, vel, dict(energy), solves, state.multipliers.copy(),
+               0 if contacts is None else int(np.count_nonzero(contacts.closed)),
+               0.0 if contacts is None else contacts.max_penetration)
+        for name, value in zip(_HISTORIES, row):
+            getattr(self, name).append(value)
+
+    def finish(self, status: str, state: State) -> None:
+        self.status = status
+        self.final_state = state

@@ -1,0 +1,118 @@
+"""How to run a model: the one definition of the run settings.
+
+:class:`RunSettings` is a pydantic dataclass: the Python API builds it with
+keywords, the model file's ``[run]`` table is validated into it (the file
+writes ``steps`` for ``n_steps``), and the CLI replaces fields of it with
+:func:`dataclasses.replace`, which validates again. Every value the run uses
+is checked here, once, with a message naming the field: a time step that is
+not finite or out of range, a solver that is not installed, a step-cut factor
+that would never shrink the step, ``rho_inf`` with a scheme that ignores it.
+Times in s, stiffnesses in N/m; a model file may write ``"2 ms"``.
+"""
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import AfterValidator, AliasChoices, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic.dataclasses import dataclass
+
+from .integrators.methods import METHODS, Method, method_preset
+from .integrators.schemes import SCHEMES
+from .units import to_si
+from .solvers import SOLVERS, available_solvers
+
+__all__ = ["RunSettings", "MIN_DT", "MAX_DT", "MAX_STEPS", "MAX_STEP_CUT_FACTOR"]
+
+# Δt bounds: Shi's coefficients use 4/Δt², finite only for Δt above ~1e-154; a step below a
+# picosecond or above a million seconds is a unit mistake in every rock-mechanics model.
+MIN_DT = 1e-12
+MAX_DT = 1e6
+MAX_STEPS = 10**12  # steps are int64 in the results file; 1e12 steps take longer than any run
+# A cut must shrink Δt enough that a handful of cuts reach a stable step (0.9**22 = 0.1).
+MAX_STEP_CUT_FACTOR = 0.9
+
+
+def _unit(kind: str) -> BeforeValidator:
+    return BeforeValidator(lambda v: v if v is None else to_si(v, kind))
+
+
+def _finite(value: float | None) -> float | None:
+    if value is not None and not math.isfinite(value):
+        raise ValueError("must be a finite number")
+    return value
+
+
+def _installed(name: str) -> str:
+    if name not in available_solvers():
+        raise ValueError(f"solver {name!r} is not installed here (pip install srdda[{name}]); "
+                         f"installed: {', '.join(available_solvers())}")
+    return name
+
+
+Finite = AfterValidator(_finite)
+Seconds = Annotated[float, _unit("time"), Finite]
+NewtonsPerMetre = Annotated[float, _unit("stiffness"), Finite]
+Degrees = Annotated[float, _unit("angle"), Finite]
+Ratio = Annotated[float, Finite]
+
+
+@dataclass(frozen=True, config=ConfigDict(extra="forbid", populate_by_name=True))
+class RunSettings:
+    """How to run a model (SI). Give ``n_steps``, ``end_time`` or both (the run stops at the first)."""
+
+    dt: Annotated[Seconds, Field(ge=MIN_DT, le=MAX_DT)]
+    n_steps: Annotated[int | None, Field(ge=0, le=MAX_STEPS,
+                                         validation_alias=AliasChoices("n_steps", "steps"))] = None
+    end_time: Annotated[Seconds | None, Field(gt=0)] = None
+    method: Literal[METHODS] = "srdda"
+    rho_inf: Annotated[Ratio, Field(ge=0, le=1)] = 1.0
+    scheme: Literal[SCHEMES] | None = None  # override the method's time scheme
+    linearization: Literal["start", "secant"] | None = None  # override the method's linearisation
+    penalty: Annotated[NewtonsPerMetre, Field(gt=0)] = 1e9  # default stiffness of fixed points (N/m)
+    solver: Annotated[Literal[SOLVERS], AfterValidator(_installed)] = "auto"
+    # The secant pass stops when |Δθ|·|δθ| (δθ: change of the rotation increment between two solves)
+    # is below this: the mismatch between the linearised and the exact rotation displacement of a
+    # point, per metre of lever arm, is about half of it.
+    secant_tolerance: Annotated[Ratio, Field(gt=0)] = 1e-13
+    secant_max_iterations: Annotated[int, Field(ge=1)] = 8
+    # Shi's dynamic ratio k01: velocities and accelerations are multiplied by it after every
+    # step. 1 = dynamic; 0 = Shi's static analysis (each step starts at rest).
+    velocity_ratio: Annotated[Ratio, Field(ge=0, le=1)] = 1.0
+    record_every: Annotated[int, Field(ge=1)] = 1
+    # contacts and step control (docs/contacts.md); lengths relative to w0 = half the model height
+    contacts: bool = True  # detect and resolve block contacts
+    contact_penalty: Annotated[NewtonsPerMetre | None, Field(gt=0)] = None  # k_n (N/m); None: ``penalty``
+    auto_penalty: Annotated[Ratio | None, Field(gt=0)] = None  # k_n = this × the largest Young's modulus × 1 m
+    shear_ratio: Annotated[Ratio, Field(gt=0)] = 0.4  # k_s / k_n
+    max_displacement_ratio: Annotated[Ratio, Field(gt=0)] = 0.01  # g2: largest vertex displacement / w0
+    contact_distance_factor: Annotated[Ratio, Field(gt=0)] = 2.5  # d0 = factor × g2 × w0
+    contact_angle_tolerance: Annotated[Degrees, Field(ge=0, lt=45)] = 3.0  # Shi's angle criterion
+    penetration_fraction: Annotated[Ratio, Field(gt=0)] = 0.4  # a step deeper than this × d0 is cut
+    open_close_max_iterations: Annotated[int, Field(ge=1)] = 20  # state-changing solves before a cut
+    friction_tolerance: Annotated[Ratio, Field(gt=0)] = 1e-3  # relative settling of a sliding normal force
+    open_close_freeze_after: Annotated[int, Field(ge=1)] = 2  # state changes of one contact before it is held
+    open_close_settle_after: Annotated[int, Field(ge=1)] = 8  # solves after which contacts may only settle
+    step_cut_factor: Annotated[Ratio, Field(gt=0, le=MAX_STEP_CUT_FACTOR)] = 1.0 / 3.0  # Δt ← factor·Δt
+    min_dt: Annotated[Seconds | None, Field(gt=0)] = None  # the run stops below this; None: 1e-6 × dt
+
+    @model_validator(mode="after")
+    def _consistent(self) -> RunSettings:
+        if self.n_steps is None and self.end_time is None:
+            raise ValueError("give n_steps (steps in a model file) or end_time")
+        method = self.resolved_method()
+        if method.scheme.name == "shi" and self.rho_inf != 1.0:
+            raise ValueError(f"rho_inf = {self.rho_inf} has no effect with the 'shi' time scheme (method "
+                             f"{self.method!r}, scheme {method.scheme.name!r}); set rho_inf = 1, or use scheme "
+                             "'paper' or 'chung-hulbert'")
+        return self
+
+    def resolved_method(self) -> Method:
+        """The method preset with this run's scheme and linearisation overrides."""
+        return method_preset(self.method, self.rho_inf, self.scheme, self.linearization)
+
+    @property
+    def last_step_limit(self) -> float:
+        """The step count at which the run stops (infinite when only ``end_time`` is given)."""
+        return math.inf if self.n_steps is None else float(self.n_steps)
+

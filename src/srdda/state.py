@@ -1,0 +1,65 @@
+"""The state of a run at one instant, and the state at t = 0.
+
+A :class:`State` is frozen: a step makes a new one. Arrays cover all blocks
+(shapes in terms of the block type: ``dim`` coordinates, ``ndof`` unknowns,
+``n_strain`` stress components).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .contact.term import ContactSet
+from .geometry.polygon import BlockMoments
+from .integrators.methods import Method
+from .model import ModelArrays
+from .term import LEDGER
+
+__all__ = ["State", "initial_state", "mass_density"]
+
+
+@dataclass(frozen=True)
+class State:
+    """Everything that changes over a run, at one instant."""
+
+    step: int
+    time: float
+    vertices: np.ndarray  # (nv, dim)
+    points: np.ndarray  # (np, dim) block-attached points
+    velocity: np.ndarray  # (nb, ndof) generalized velocity
+    acceleration: np.ndarray  # (nb, ndof)
+    stress: np.ndarray  # (nb, n_strain)
+    rotation: np.ndarray  # accumulated rotation, as the block type composes it
+    moments: BlockMoments  # block integrals of ``vertices``, computed once per state
+    multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))  # μ of the last step (constraint rows)
+    ledger: np.ndarray = field(default_factory=lambda: np.zeros(len(LEDGER)))  # cumulative work, see LEDGER
+    contacts: ContactSet | None = None  # contacts as the step that led here ended them
+    dt_next: float | None = None  # the step-size control's Δt for the next step (None: the run's dt)
+
+
+def mass_density(arrays: ModelArrays, moments: BlockMoments) -> np.ndarray:
+    """Density (nb,) of the blocks in the configuration of ``moments``."""
+    return arrays.density
+
+
+def initial_state(arrays: ModelArrays, method: Method) -> State:
+    """The state at t = 0; the acceleration solves M·A = F(0) block by block."""
+    bt = arrays.block_type
+    mom = arrays.moments(arrays.vertices)
+    density = mass_density(arrays, mom)
+    M = density[:, None, None] * bt.mass_matrix(mom.volume, mom.second)
+    force = np.zeros((arrays.n_blocks, bt.ndof))
+    force[:, bt.translation] = (density * mom.volume)[:, None] * arrays.gravity
+    force[:, bt.strain] = -mom.volume[:, None] * arrays.stress
+    acc = np.zeros_like(force)
+    massive = arrays.density > 0
+    if np.any(massive):
+        acc[massive] = np.linalg.solve(M[massive], force[massive][..., None])[..., 0]
+    if method.scheme.name == "shi":
+        acc[:] = 0.0
+    acc[arrays.block_fixed] = 0.0
+    velocity = arrays.velocity.copy()
+    velocity[arrays.block_fixed] = 0.0
+    return State(0, 0.0, arrays.vertices.copy(), arrays.points.copy(), velocity, acc, arrays.stress.copy(),
+                 bt.initial_rotation(arrays.n_blocks), mom, np.zeros(arrays.links.n_multipliers))

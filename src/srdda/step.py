@@ -1,0 +1,187 @@
+"""One time step: predict, iterate over the terms until all have settled, commit.
+
+    begin      every term looks at the state at t (contacts are detected);
+    iterate    assemble the terms into the block system, solve, ask each term
+               whether its own iteration has settled (open-close, secant pass);
+    update     velocities, accelerations, points, stresses and rotations at
+               t + Δt from the increments (the method's kinematics);
+    review     a term may cut the step (a vertex moved too far, too deep a
+               penetration) or bound the next Δt;
+    commit     terms store what they carry to the next step; the work of the
+               step goes to the ledger.
+
+:meth:`Stepper.step` returns a :class:`StepOutcome` (accepted, cut with the
+reason, or diverged with a message); it raises nothing to steer the run.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Literal
+
+import numpy as np
+
+from .assembly.blocks import block_terms
+from .assembly.system import BlockSystem
+from .constraints import point_terms
+from .contact.term import ContactModel, ContactParameters, ContactTerm
+from .integrators.methods import Method
+from .integrators.secant import SecantPass
+from .model import ModelArrays
+from .settings import RunSettings
+from .solvers import LinearSolver, SolverError
+from .state import State
+from .term import StepContext, StepCut, Term
+
+__all__ = ["StepOutcome", "Stepper", "model_half_height", "contact_parameters"]
+
+
+@dataclass(frozen=True)
+class StepOutcome:
+    """How a step attempt ended: ``accepted`` (``state`` is the new state), ``cut`` or ``diverged``."""
+
+    status: Literal["accepted", "cut", "diverged"]
+    solves: int
+    dt_next: float  # the Δt to use next: grown back after an accepted step, reduced after a cut
+    state: State | None = None
+    reason: str = ""
+
+
+def model_half_height(vertices: np.ndarray) -> float:
+    """w0: half the height of the model (half its width if it is flat), Shi's length scale."""
+    extent = np.ptp(vertices, axis=0)
+    return 0.5 * float(extent[-1] if extent[-1] > 0 else extent[0])
+
+
+def contact_parameters(arrays: ModelArrays, settings: RunSettings, w0: float) -> ContactParameters:
+    """Contact stiffnesses and distances of a run (docs/contacts.md)."""
+    kn = settings.contact_penalty if settings.contact_penalty is not None else settings.penalty
+    if settings.auto_penalty is not None:
+        young = 1.0 / arrays.compliance[:, 0, 0]  # E in plane stress, E/(1-ν²) in plane strain
+        kn = settings.auto_penalty * float(np.max(young)) * 1.0  # × unit thickness
+    d0 = settings.contact_distance_factor * settings.max_displacement_ratio * w0
+    return ContactParameters(kn, settings.shear_ratio * kn, d0, np.radians(settings.contact_angle_tolerance),
+                             settings.penetration_fraction * d0, settings.friction_tolerance,
+                             settings.open_close_freeze_after, settings.open_close_settle_after)
+
+
+class Stepper:
+    """The terms of a run and the step that loops over them."""
+
+    def __init__(self, arrays: ModelArrays, settings: RunSettings, solver: LinearSolver) -> None:
+        self.arrays = arrays
+        self.settings = settings
+        self.method: Method = settings.resolved_method()
+        self.solver = solver
+        self.terms: list[Term] = [*block_terms(), *point_terms(arrays, settings.penalty)]
+        if settings.contacts and arrays.n_blocks > 1:
+            w0 = model_half_height(arrays.vertices)
+            model = ContactModel(arrays, contact_parameters(arrays, settings, w0))
+            self.terms.append(ContactTerm(model, settings.open_close_max_iterations,
+                                          settings.max_displacement_ratio * w0, settings.dt))
+        self.secant = SecantPass(settings.secant_tolerance, settings.secant_max_iterations)
+
+    def begin(self, state: State, dt: float) -> tuple[StepContext, list[Term]]:
+        """The context of a step attempt from ``state`` and the terms that take part, each begun."""
+        method = self.method
+        coeffs = method.scheme.coefficients(dt)
+        ctx = StepContext(self.arrays, state, method, coeffs, dt, state.time + coeffs.load_time_fraction * dt,
+                          self.settings.penalty)
+        terms = list(self.terms)
+        for term in terms:
+            term.begin(ctx)
+        if method.linearization == "secant" and any(t.at_points for t in terms):
+            terms.append(self.secant)
+            self.secant.begin(ctx)
+        return ctx, terms
+
+    def assemble(self, ctx: StepContext, terms: list[Term], base: BlockSystem | None = None) -> BlockSystem:
+        """The step's system: ``base`` (the terms that are the same every solve) plus the others; fixed blocks held.
+
+        Without ``base`` every term is added.
+        """
+        if base is None:
+            system = BlockSystem.empty(self.arrays.n_blocks, self.arrays.block_type.ndof)
+            added = terms
+        else:
+            system = BlockSystem(base.diag.copy(), base.rhs.copy())
+            added = [t for t in terms if not t.same_every_solve]
+        for term in added:
+            term.add_to(system, ctx)
+        system.fix_blocks(self.arrays.block_fixed)
+        return system
+
+    def base_system(self, ctx: StepContext, terms: list[Term]) -> BlockSystem:
+        """The sum of the terms that add the same to every solve of the step."""
+        system = BlockSystem.empty(self.arrays.n_blocks, self.arrays.block_type.ndof)
+        for term in terms:
+            if term.same_every_solve:
+                term.add_to(system, ctx)
+        return system
+
+    def step(self, state: State, dt: float) -> StepOutcome:
+        """One step of Δt = ``dt`` from ``state`` (module doc)."""
+        s = self.settings
+        ctx, terms = self.begin(state, dt)
+        label = f"step {state.step + 1}"
+        ndof = self.arrays.block_type.ndof
+        base = self.base_system(ctx, terms)
+        solves = 0
+        changes = 0  # solves after which a step-cutting term (open-close) had not settled
+        while True:
+            system = self.assemble(ctx, terms, base)
+            try:
+                solution = self.solver.solve(system, system.full_rhs())
+            except SolverError as exc:
+                return StepOutcome("diverged", solves, dt, reason=f"{label}: {exc}")
+            dd = solution[: system.size].reshape(-1, ndof)
+            multipliers = solution[system.size:]
+            solves += 1
+            pending = [t for t in terms if not t.converged(dd, ctx)]
+            cutting = [t for t in pending if t.cuts_step]
+            if cutting:
+                changes += 1
+                if changes >= min(t.max_iterations for t in cutting):
+                    return StepOutcome("cut", solves, dt * s.step_cut_factor,
+                                       reason=f"{label}: {cutting[0].pending()} in {solves} solves")
+            elif all(solves - changes >= t.max_iterations for t in pending):
+                break
+        new = self._update(ctx, dd, multipliers)
+        if not (np.all(np.isfinite(new.vertices)) and np.all(np.isfinite(new.velocity))):
+            return StepOutcome("diverged", solves, dt, reason=f"step {new.step}: non-finite displacement or velocity")
+        dt_next = dt
+        for term in terms:
+            verdict = term.review(ctx, new)
+            if isinstance(verdict, StepCut):
+                return StepOutcome("cut", solves, dt * max(s.step_cut_factor, verdict.factor),
+                                   reason=f"step {new.step}: {verdict.reason}")
+            if verdict is not None:
+                dt_next = verdict
+        work = [w for w in (t.work(ctx, new, dd, multipliers) for t in terms) if w is not None]
+        if work:
+            new = replace(new, ledger=state.ledger + np.sum(work, axis=0))
+        for term in terms:
+            new = term.commit(new)
+        return StepOutcome("accepted", solves, dt_next, new)
+
+    def _update(self, ctx: StepContext, dd: np.ndarray, multipliers: np.ndarray) -> State:
+        """The state at t + Δt from the increments ``dd`` (the method's kinematics and stress update)."""
+        arrays, state, method, c = ctx.arrays, ctx.state, ctx.method, ctx.coeffs
+        bt = arrays.block_type
+        V, A = state.velocity, state.acceleration
+        ratio = self.settings.velocity_ratio
+        new_v = ratio * (c.v_d * dd + c.v_v * V + c.v_a * A)
+        new_a = ratio * (c.a_d * dd + c.a_v * V + c.a_a * A)
+        centroid = state.moments.centroid
+        owner = arrays.vertex_block
+        vertices = state.vertices + bt.point_displacement(state.vertices - centroid[owner], dd[owner],
+                                                          method.kinematics)
+        pb = arrays.point_block
+        points = state.points + bt.point_displacement(state.points - centroid[pb], dd[pb], method.kinematics)
+        s = bt.strain
+        stress = state.stress + np.einsum("nij,nj->ni", arrays.elasticity, dd[:, s])
+        if method.objective_stress:
+            stress = bt.rotate_symmetric(stress, dd, 1.0)
+            new_v[:, s] = bt.rotate_symmetric(new_v[:, s], dd, 2.0)
+            new_a[:, s] = bt.rotate_symmetric(new_a[:, s], dd, 2.0)
+        return State(state.step + 1, state.time + ctx.dt, vertices, points, new_v, new_a, stress,
+                     bt.compose_rotation(state.rotation, dd), arrays.moments(vertices), multipliers, state.ledger)
