@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -132,6 +133,15 @@ class ModelArrays:
     @property
     def n_blocks(self) -> int:
         return len(self.block_ptr) - 1
+
+    @cached_property
+    def block_mass(self) -> np.ndarray:
+        """Mass (nb,) of every block: density × volume of the model as built (kg per m of thickness in 2D).
+
+        Mass is conserved: when a method changes a block's volume (dda0's rotation
+        stretch, elastic strain) its density changes, not its mass.
+        """
+        return self.density * self.moments(self.vertices).volume
 
     @property
     def block_type(self) -> BlockType:

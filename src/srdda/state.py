@@ -39,8 +39,8 @@ class State:
 
 
 def mass_density(arrays: ModelArrays, moments: BlockMoments) -> np.ndarray:
-    """Density (nb,) of the blocks in the configuration of ``moments``."""
-    return arrays.density
+    """Density (nb,) of the blocks in the configuration of ``moments``: their constant mass / their volume."""
+    return arrays.block_mass / moments.volume
 
 
 def initial_state(arrays: ModelArrays, method: Method) -> State:

@@ -9,7 +9,8 @@ the block type's slices. With the scheme coefficients c (module doc of
 * elasticity: c_k·V_b·D on the strain block, V_b·D·(k_v V + k_a A) on the right
   (the paper's Δt·K·V(t+Δt-αf) term, zero for Shi's scheme);
 * initial stress: -V_b·σ on the strain unknowns;
-* body force: ρ·V_b·g on the translation.
+* body force: m·g on the translation, m = ρ·V_b of the block as built (mass is
+  conserved when a method changes the volume).
 """
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ __all__ = ["InertiaTerm", "ElasticityTerm", "InitialStressTerm", "BodyForceTerm"
 
 
 def mass_matrices(arrays: ModelArrays, state: State) -> np.ndarray:
-    """M = ρ∫TᵀT (nb, ndof, ndof) of every block in the configuration of ``state``."""
+    """M = ρ∫TᵀT (nb, ndof, ndof) of every block in the configuration of ``state``, ρ = m / V_b."""
     mom = state.moments
     density = mass_density(arrays, mom)
     return density[:, None, None] * arrays.block_type.mass_matrix(mom.volume, mom.second)
@@ -87,20 +88,17 @@ class InitialStressTerm(Term):
 
 
 class BodyForceTerm(Term):
-    """ρ·V_b·g on the translation of every block; gravitational potential energy."""
+    """m·g on the translation of every block; gravitational potential energy."""
 
     same_every_solve = True
 
     energy_kind = "gravity"
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
-        mom = ctx.state.moments
-        mass = mass_density(ctx.arrays, mom) * mom.volume
-        system.rhs[:, ctx.block_type.translation] += mass[:, None] * ctx.arrays.gravity
+        system.rhs[:, ctx.block_type.translation] += ctx.arrays.block_mass[:, None] * ctx.arrays.gravity
 
     def energy(self, arrays: ModelArrays, state: State) -> float:
-        mom = state.moments
-        return -float(np.sum(mass_density(arrays, mom) * mom.volume * (mom.centroid @ arrays.gravity)))
+        return -float(np.sum(arrays.block_mass * (state.moments.centroid @ arrays.gravity)))
 
 
 def block_terms() -> list[Term]:

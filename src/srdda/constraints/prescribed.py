@@ -87,7 +87,7 @@ class PrescribedPenaltyTerm(Term):
 
 
 class BaseAccelerationTerm(Term):
-    """Body force -ρ·V_b·a_g(t) on the translation of every block; its work goes to ``work_loads``."""
+    """Body force -m·a_g(t) on the translation of every block; its work goes to ``work_loads``."""
 
     same_every_solve = True
 
@@ -95,11 +95,11 @@ class BaseAccelerationTerm(Term):
         self.history = links.base_acceleration
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
-        mass = ctx.arrays.density * ctx.state.moments.volume
+        mass = ctx.arrays.block_mass
         system.rhs[:, ctx.block_type.translation] -= mass[:, None] * self.history(ctx.t_load)
 
     def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
-        mass = ctx.arrays.density * ctx.state.moments.volume
+        mass = ctx.arrays.block_mass
         out = np.zeros(len(LEDGER))
         shift = dd[:, ctx.block_type.translation]
         out[LEDGER.index("work_loads")] -= float(np.sum(mass[:, None] * self.history(ctx.t_load)[None, :] * shift))
