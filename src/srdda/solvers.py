@@ -23,10 +23,12 @@ from __future__ import annotations
 
 import importlib.util
 import warnings
+from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .assembly.system import BlockSystem
@@ -52,16 +54,61 @@ def _check(x: np.ndarray) -> np.ndarray:
     return x
 
 
-def _saddle_superlu(system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+Matrix = np.ndarray | sp.csr_matrix
+Factor = Callable[[np.ndarray], np.ndarray]
+
+
+def _same(a: Matrix, b: Matrix) -> bool:
+    """True if two assembled matrices are equal entry for entry (same sparsity and values)."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and np.array_equal(a, b)
+    return (a.shape == b.shape and np.array_equal(a.indptr, b.indptr) and np.array_equal(a.indices, b.indices)
+            and np.array_equal(a.data, b.data))
+
+
+class _Factorizing:
+    """A backend that factorises the assembled matrix, and keeps the factor while the matrix is unchanged.
+
+    Open-close iterations that only change friction forces, and repeated solves
+    of a linear step, change the right-hand side only: they reuse the factor.
+    One instance serves one run (``run`` calls :func:`get_solver`), so the
+    cache is never shared between runs.
+    """
+
+    name = "base"
+
+    def __init__(self) -> None:
+        self._last: tuple[Matrix, Factor] | None = None
+        self.factorizations = 0  # how many factorisations this instance made (benchmarks read it)
+
+    def matrix(self, system: BlockSystem) -> Matrix:
+        return system.saddle_csr() if system.n_constraints else system.to_csr()
+
+    def factor(self, matrix: Matrix, constrained: bool) -> Factor:
+        raise NotImplementedError
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        matrix = self.matrix(system)
+        if self._last is not None and _same(self._last[0], matrix):
+            factor = self._last[1]
+        else:
+            factor = self.factor(matrix, bool(system.n_constraints))
+            self.factorizations += 1
+            self._last = (matrix, factor)
+        return _check(factor(rhs))
+
+
+def _saddle_superlu(matrix: sp.csr_matrix) -> Factor:
     """Sparse LU (SuperLU, partial pivoting) of the augmented constrained system."""
     try:
-        lu = spla.splu(system.saddle_csr().tocsc(), permc_spec="COLAMD")
+        return spla.splu(matrix.tocsc(), permc_spec="COLAMD").solve
     except RuntimeError as exc:
         raise SolverError(f"singular constrained system (redundant or conflicting constraints?): {exc}") from exc
-    return _check(lu.solve(rhs))
 
 
 class DenseSolver:
+    """LAPACK's symmetric solve of the dense matrix (tiny systems: refactorising costs less than comparing)."""
+
     name = "dense"
 
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
@@ -75,44 +122,42 @@ class DenseSolver:
             raise SolverError(f"singular system: {exc}") from exc
 
 
-class SuperLUSolver:
+class SuperLUSolver(_Factorizing):
     name = "superlu"
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
-        if system.n_constraints:
-            return _saddle_superlu(system, rhs)
-        A = system.to_csr().tocsc()
+    def factor(self, matrix: Matrix, constrained: bool) -> Factor:
+        if constrained:
+            return _saddle_superlu(matrix)
         try:
-            lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                           options={"SymmetricMode": True})
+            return spla.splu(matrix.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                             options={"SymmetricMode": True}).solve
         except RuntimeError as exc:
             raise SolverError(f"singular system: {exc}") from exc
-        return _check(lu.solve(rhs))
 
 
-class CholmodSolver:
+class CholmodSolver(_Factorizing):
     name = "cholmod"
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
-        if system.n_constraints:
-            return _saddle_superlu(system, rhs)
+    def factor(self, matrix: Matrix, constrained: bool) -> Factor:
+        if constrained:
+            return _saddle_superlu(matrix)
         from sksparse.cholmod import CholmodError, cholesky
 
         try:
-            factor = cholesky(system.to_csr().tocsc())
+            return cholesky(matrix.tocsc())
         except CholmodError as exc:
             raise SolverError(f"CHOLMOD failed: {exc}") from exc
-        return _check(factor(rhs))
 
 
-class PardisoSolver:
+class PardisoSolver(_Factorizing):
     name = "pardiso"
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+    def factor(self, matrix: Matrix, constrained: bool) -> Factor:
         import pypardiso
 
-        matrix = system.saddle_csr() if system.n_constraints else system.to_csr()
-        return _check(pypardiso.spsolve(matrix, rhs))
+        solver = pypardiso.PyPardisoSolver()
+        solver.factorize(matrix)
+        return lambda rhs: solver.solve(matrix, rhs)
 
 
 class AutoSolver:
