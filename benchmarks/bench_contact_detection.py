@@ -15,7 +15,8 @@ import time
 import numpy as np
 
 from srdda.contact.broadphase import block_boxes, candidate_pairs
-from srdda.contact.narrowphase import detect_contacts, previous_vertex_index
+from srdda.contact.narrowphase import detect_contacts
+from srdda.geometry.polygon import previous_vertex_index
 from srdda.geometry.polygon import next_vertex_index
 
 

@@ -122,7 +122,6 @@ class ModelArrays:
     vertex_block: np.ndarray  # (nv,) owner block of each vertex
     next_vertex: np.ndarray  # (nv,) next vertex of the same block
     compliance: np.ndarray  # (nb, 3, 3) = inverse of elasticity
-    fixed_block: np.ndarray  # (nf,) block of each fixed point
     block_fixed: np.ndarray  # (nb,) bool: the block does not move (ground, slope)
     block_material: np.ndarray  # (nb,) index into the model's materials
     edge_joint: np.ndarray  # (nv,) joint material of the edge starting at each vertex, -1 = by materials
@@ -442,7 +441,6 @@ class Model:
             vertex_block=np.repeat(np.arange(len(counts)), counts),
             next_vertex=next_vertex_index(block_ptr),
             compliance=np.linalg.inv(elasticity),
-            fixed_block=point_block[rows[0]],
             block_fixed=np.array([b.fixed for b in self.blocks], dtype=bool),
             block_material=np.array([b.material for b in self.blocks], dtype=np.int64),
             edge_joint=edge_joint,

@@ -76,8 +76,9 @@ class Stepper:
         if settings.contacts and arrays.n_blocks > 1:
             w0 = model_half_height(arrays.vertices)
             model = ContactModel(arrays, contact_parameters(arrays, settings, w0))
-            self.terms.append(ContactTerm(model, settings.open_close_max_iterations,
-                                          settings.max_displacement_ratio * w0, settings.dt))
+            if np.any(model.can_touch):
+                self.terms.append(ContactTerm(model, settings.open_close_max_iterations,
+                                              settings.max_displacement_ratio * w0, settings.dt))
         self.secant = SecantPass(settings.secant_tolerance, settings.secant_max_iterations)
 
     def begin(self, state: State, dt: float) -> tuple[StepContext, list[Term]]:

@@ -130,12 +130,6 @@ class ConstraintArrays:
         """Constraint rows (multipliers) per step: ``dim`` per hinge or pin, then the driven components."""
         return self.dim * self.n_hinges + int(self.prescribed_mask[self.prescribed_multiplier].sum())
 
-    @property
-    def active(self) -> bool:
-        """True if any hinge, spring, prescribed point or base acceleration is present."""
-        return bool(self.n_hinges or len(self.spring_rows_a) or len(self.prescribed_rows)
-                    or self.base_acceleration is not None)
-
     def prescribed_displacement(self, t: float) -> np.ndarray:
         """Prescribed displacement (n, dim) of every prescribed point at time t (from its start).
 

@@ -35,18 +35,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["detect_contacts", "previous_vertex_index", "VERTEX_EDGE", "VERTEX_VERTEX"]
+__all__ = ["detect_contacts", "VERTEX_EDGE", "VERTEX_VERTEX", "FOUND_VERTEX", "FOUND_EDGE", "FOUND_KIND",
+           "FOUND_FIELDS"]
 
 VERTEX_EDGE = 0
 VERTEX_VERTEX = 1
-
-
-def previous_vertex_index(block_ptr: np.ndarray) -> np.ndarray:
-    """Index of the previous vertex (cyclically within its block) for every vertex."""
-    n = int(block_ptr[-1])
-    prv = np.arange(-1, n - 1)
-    prv[block_ptr[:-1]] = block_ptr[1:] - 1
-    return prv
 
 
 # columns of a detected-contact row [vertex, edge start, kind]

@@ -20,7 +20,8 @@ from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays
 from ..term import StepContext, StepCut, Term
 from .broadphase import block_boxes, candidate_pairs
-from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts, previous_vertex_index
+from ..geometry.polygon import previous_vertex_index
+from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts
 from .openclose import LOCKED, OPEN, SLIDING, next_states
 from .springs import ContactGeometry, bond_length, contact_geometry
 from .transfer import contact_keys, match_previous
@@ -215,8 +216,13 @@ class ContactStep:
         return float(max(pen.max(), 0.0)) if len(pen) else 0.0
 
 
+def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:
+    """One integer per unordered block pair (k, 2): min·n + max."""
+    return np.min(pairs, axis=1) * n_blocks + np.max(pairs, axis=1) if len(pairs) else np.zeros(0, np.int64)
+
+
 class ContactModel:
-    """Detects the contacts of a configuration and builds each step's :class:`ContactTerm`."""
+    """Detects the contacts of a configuration (hinged block pairs left out) and builds each step's contacts."""
 
     def __init__(self, arrays: ModelArrays, params: ContactParameters) -> None:
         self.arrays = arrays
@@ -225,12 +231,19 @@ class ContactModel:
         self.movable = ~arrays.block_fixed
         self.sin_tol = float(np.sin(params.angle_tolerance))
         self.cos_parallel = float(np.cos(params.angle_tolerance))
+        # blocks joined by a hinge turn about a shared point: their faces are not joints
+        self.excluded = np.unique(pair_keys(arrays.links.hinged_block_pairs, arrays.n_blocks))
+        first, second = np.divmod(self.excluded, arrays.n_blocks)
+        partners_left_out = np.bincount(np.concatenate([first, second]), minlength=arrays.n_blocks)
+        self.can_touch = partners_left_out < arrays.n_blocks - 1  # some other block may touch it
 
     def detect(self, vertices: np.ndarray) -> np.ndarray:
         """Contacts (k, 3) [vertex, edge start, kind] of a configuration."""
         arr = self.arrays
         boxes = block_boxes(vertices, arr.block_ptr)
         pairs = candidate_pairs(boxes, self.params.distance, self.movable)
+        if len(self.excluded):
+            pairs = pairs[~np.isin(pair_keys(pairs, arr.n_blocks), self.excluded)]
         if len(pairs) == 0:
             return np.empty((0, FOUND_FIELDS), dtype=np.int64)
         return detect_contacts(vertices, arr.block_ptr, arr.vertex_block, arr.next_vertex, self.previous_vertex,
@@ -307,8 +320,14 @@ class ContactTerm(Term):
         return "open-close did not converge"
 
     def review(self, ctx: StepContext, new: State) -> StepCut | float | None:
-        """Cut a step whose vertices moved more than g2·w0 or that penetrated too deep; else grow Δt."""
-        moved = float(np.max(np.hypot.reduce(new.vertices - ctx.state.vertices, axis=1)))
+        """Cut a step whose vertices moved more than g2·w0 or that penetrated too deep; else grow Δt.
+
+        g2 keeps contacts detectable between two detections, so it bounds the
+        vertices of blocks that some other block may touch (not those whose every
+        neighbour is hinged to them).
+        """
+        touching = self.model.can_touch[ctx.arrays.vertex_block]
+        moved = float(np.max(np.hypot.reduce(new.vertices[touching] - ctx.state.vertices[touching], axis=1)))
         if moved > self.max_displacement:
             return StepCut(f"a vertex moved {moved:.3g} m > g2·w0 = {self.max_displacement:.3g} m",
                            min(0.9, 0.9 * self.max_displacement / moved))

@@ -37,6 +37,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from .polygon import next_vertex_index, polygon_areas, previous_vertex_index
+
 __all__ = ["NO_JOINT", "BlockCut", "CuttingError", "cut_blocks"]
 
 NodeFunction = Callable[[np.ndarray], np.ndarray]
@@ -75,15 +77,8 @@ class BlockCut:
         return self.vertices[s:e], self.edge_joint[s:e]
 
     def areas(self) -> np.ndarray:
-        """Exact signed areas (positive: counter-clockwise) of all blocks (shoelace, vectorised)."""
-        counts = np.diff(self.block_ptr)
-        owner = np.repeat(np.arange(len(counts)), counts)
-        nxt = np.arange(1, len(self.vertices) + 1)
-        nxt[self.block_ptr[1:] - 1] = self.block_ptr[:-1]
-        ref = np.add.reduceat(self.vertices, self.block_ptr[:-1], axis=0) / counts[:, None]
-        p = self.vertices - ref[owner]
-        q = p[nxt]
-        return np.add.reduceat(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1], self.block_ptr[:-1]) / 2.0
+        """Exact signed areas (positive: counter-clockwise) of all blocks."""
+        return polygon_areas(self.vertices, self.block_ptr)
 
     def locate(self, points: np.ndarray, what: str = "point") -> np.ndarray:
         """Block index of each point; a point inside a block wins over one on a block's edge.
@@ -505,26 +500,15 @@ def _ccw_rings(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     block_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     start = block_ptr[:-1][idx]
     k = np.arange(len(idx)) - start
-    nxt = np.where(k + 1 < counts[idx], np.arange(len(idx)) + 1, start)
-    p, q = coords, coords[nxt]
-    ref = coords[start]
-    signed = np.bincount(idx, weights=(p[:, 0] - ref[:, 0]) * (q[:, 1] - ref[:, 1])
-                         - (q[:, 0] - ref[:, 0]) * (p[:, 1] - ref[:, 1]), minlength=len(faces))
-    flip = (signed < 0)[idx]
+    flip = (polygon_areas(coords, block_ptr) < 0)[idx]
     src = np.where(flip, start + counts[idx] - 1 - k, np.arange(len(idx)))
     return coords[src], block_ptr
-
-
-def _next_index(block_ptr: np.ndarray) -> np.ndarray:
-    nxt = np.arange(1, block_ptr[-1] + 1)
-    nxt[block_ptr[1:] - 1] = block_ptr[:-1]
-    return nxt
 
 
 def _edge_labels(vertices: np.ndarray, block_ptr: np.ndarray, segs: np.ndarray, types: np.ndarray,
                  tol: float) -> np.ndarray:
     """Joint type of the input segment each block edge lies on (later segments win ties)."""
-    mid = 0.5 * (vertices + vertices[_next_index(block_ptr)])
+    mid = 0.5 * (vertices + vertices[next_vertex_index(block_ptr)])
     tree = shapely.STRtree(shapely.linestrings(segs.reshape(-1, 2, 2)))
     ie, iseg = tree.query_nearest(shapely.points(mid), max_distance=tol, all_matches=True)
     best = np.full(len(mid), -1, dtype=np.int64)
@@ -543,9 +527,8 @@ def _remove_collinear(vertices: np.ndarray, block_ptr: np.ndarray, edge_joint: n
     only when it lies within ``junction_tol`` (a length: rounding level) of
     the chord of its two neighbours.
     """
-    nxt = _next_index(block_ptr)
-    prev = np.empty_like(nxt)
-    prev[nxt] = np.arange(len(nxt))
+    nxt = next_vertex_index(block_ptr)
+    prev = previous_vertex_index(block_ptr)
     _, node = np.unique(vertices, axis=0, return_inverse=True)
     node = node.ravel()
     pairs = np.unique(np.sort(np.column_stack([node, node[nxt]]), axis=1), axis=0)

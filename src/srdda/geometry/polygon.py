@@ -22,6 +22,8 @@ __all__ = [
     "block_moments",
     "normalize_polygon",
     "next_vertex_index",
+    "previous_vertex_index",
+    "polygon_areas",
 ]
 
 
@@ -61,6 +63,33 @@ def next_vertex_index(block_ptr: np.ndarray) -> np.ndarray:
     return nxt
 
 
+def previous_vertex_index(block_ptr: np.ndarray) -> np.ndarray:
+    """Index of the previous vertex (cyclically within its block) for every vertex."""
+    n = int(block_ptr[-1])
+    prv = np.arange(-1, n - 1)
+    prv[block_ptr[:-1]] = block_ptr[1:] - 1
+    return prv
+
+
+def _edges(vertices: np.ndarray, block_ptr: np.ndarray, owner: np.ndarray | None,
+           nxt: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Edge start p and end q relative to their block's vertex mean ``ref``, and p × q (Green's sums)."""
+    counts = np.diff(block_ptr)
+    ref = np.add.reduceat(vertices, block_ptr[:-1], axis=0) / counts[:, None]
+    if owner is None:
+        owner = np.repeat(np.arange(len(counts)), counts)
+    if nxt is None:
+        nxt = next_vertex_index(block_ptr)
+    p = vertices - ref[owner]
+    q = p[nxt]
+    return p, q, p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1], ref
+
+
+def polygon_areas(vertices: np.ndarray, block_ptr: np.ndarray) -> np.ndarray:
+    """Exact signed areas (positive: counter-clockwise) of all polygons (Green's theorem edge sums)."""
+    return np.add.reduceat(_edges(vertices, block_ptr, None, None)[2], block_ptr[:-1]) / 2.0
+
+
 def block_moments(vertices: np.ndarray, block_ptr: np.ndarray, owner: np.ndarray | None = None,
                   nxt: np.ndarray | None = None) -> BlockMoments:
     """Exact area, centroid and central second moments of all polygons.
@@ -70,16 +99,8 @@ def block_moments(vertices: np.ndarray, block_ptr: np.ndarray, owner: np.ndarray
     ``nxt`` (:func:`next_vertex_index`) may be passed to save recomputing them.
     """
     starts = block_ptr[:-1]
-    counts = np.diff(block_ptr)
-    ref = np.add.reduceat(vertices, starts, axis=0) / counts[:, None]
-    if owner is None:
-        owner = np.repeat(np.arange(len(counts)), counts)
-    if nxt is None:
-        nxt = next_vertex_index(block_ptr)
-    p = vertices - ref[owner]
-    q = p[nxt]
+    p, q, cross, ref = _edges(vertices, block_ptr, owner, nxt)
     x0, y0, x1, y1 = p[:, 0], p[:, 1], q[:, 0], q[:, 1]
-    cross = x0 * y1 - x1 * y0
 
     def edge_sum(terms: np.ndarray) -> np.ndarray:
         return np.add.reduceat(terms, starts)
@@ -127,8 +148,6 @@ def normalize_polygon(vertices: np.ndarray, name: str = "polygon") -> np.ndarray
         raise PolygonError(f"{name}: polygon repeats a vertex")
     if poly.area <= 0.0:
         raise PolygonError(f"{name}: polygon has zero area (degenerate)")
-    x, y = v[:, 0], v[:, 1]
-    signed = 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
-    if signed < 0:
+    if polygon_areas(v, np.array([0, len(v)]))[0] < 0:
         v = v[::-1].copy()
     return v
