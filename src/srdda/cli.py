@@ -12,16 +12,18 @@ from pathlib import Path
 
 import click
 import numpy as np
+from pydantic import ValidationError
 from tqdm import tqdm
 
 from . import __version__
 from .integrators.methods import METHODS
 from .cli_results import animate_command, plot_command, report_paper, resume_run, vtk_command
 from .io.convert import convert
-from .io.modelfile import ModelFileError, load_model
+from .io.modelfile import ModelFileError, format_validation, load_model
 from .io.results_store import ResultsStore
 from .paper import EXAMPLES, relative_error, run_example
 from .results import Result
+from .settings import RunSettings
 from .simulation import run
 from .solvers import available_solvers
 
@@ -39,6 +41,14 @@ def _load(path: str):
         return load_model(path)
     except ModelFileError as exc:
         raise click.UsageError(str(exc)) from None
+
+
+def _override(settings: RunSettings, option: str, **changes: object) -> RunSettings:
+    """``settings`` with ``changes`` from a command-line option, validated like a model file."""
+    try:
+        return replace(settings, **changes)
+    except ValidationError as exc:
+        raise click.UsageError(format_validation(exc, option, "conflicts with the model's run settings")) from None
 
 
 def save_histories(result: Result, out: Path) -> Path:
@@ -82,9 +92,9 @@ def run_command(model: str | None, method: str | None, steps: int | None, out: s
         raise click.UsageError("missing MODEL (or --resume RESULTS)")
     mdl, settings = _load(model)
     if method:
-        settings = replace(settings, method=method)
+        settings = _override(settings, "--method", method=method)
     if steps is not None:
-        settings = replace(settings, n_steps=steps)
+        settings = _override(settings, "--steps", n_steps=steps)
     out_dir = Path(out) if out else Path(model).with_suffix("")
     out_dir.mkdir(parents=True, exist_ok=True)
     store = ResultsStore(out_dir / "results.h5", settings, flush_every=flush_every,

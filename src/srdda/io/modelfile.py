@@ -22,7 +22,7 @@ from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..settings import RunSettings
 from .schema import HistorySection, ModelFile
 
-__all__ = ["ModelFileError", "load_model", "model_from_dict", "save_model", "model_to_dict"]
+__all__ = ["ModelFileError", "load_model", "model_from_dict", "save_model", "model_to_dict", "format_validation"]
 
 
 class ModelFileError(ValueError):
@@ -41,10 +41,11 @@ def _field_path(loc: tuple[Any, ...]) -> str:
     return out or "(top level)"
 
 
-def _format_validation(exc: ValidationError, source: str) -> str:
-    lines = [f"{source}: invalid model file"]
+def format_validation(exc: ValidationError, source: str, what: str = "invalid model file") -> str:
+    """One message for every problem of a validation error, each line naming its field."""
+    lines = [f"{source}: {what}"]
     for err in exc.errors():
-        msg = err["msg"]
+        msg = err["msg"].removeprefix("Value error, ")
         if err["type"] in ("extra_forbidden", "unexpected_keyword_argument"):
             msg = "unknown field (check the spelling)"
         elif err["type"] == "missing":
@@ -70,7 +71,7 @@ def model_from_dict(data: dict[str, Any], source: str = "model") -> tuple[Model,
     try:
         spec = ModelFile.model_validate(data)
     except ValidationError as exc:
-        raise ModelFileError(_format_validation(exc, source)) from None
+        raise ModelFileError(format_validation(exc, source)) from None
     try:
         return _build(spec, source)
     except (ModelError, PolygonError, ValueError) as exc:

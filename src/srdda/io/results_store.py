@@ -453,8 +453,8 @@ def resume(path: str | Path, model: Model | ModelArrays | None = None, flush_eve
 
     The model comes from the file unless given: its stored arrays, or, when it
     has loads given as Python functions, the stored model file text (a model
-    built in Python with such loads must be given). Returns the in-memory :class:`Result` of the
-    continued part; the file then holds the whole run.
+    built in Python with such loads must be given). Returns the :class:`Result` of the continued
+    part, holding its first and last recorded steps (the file holds the whole run).
     """
     arrays = _resume_arrays(path) if model is None else (model.arrays() if isinstance(model, Model) else model)
     with _open_read(path) as f:
@@ -466,4 +466,4 @@ def resume(path: str | Path, model: Model | ModelArrays | None = None, flush_eve
     remaining = dataclasses.replace(settings, n_steps=max(0, last_step - state.step))
     store = ResultsStore(path, remaining, flush_every=flush_every or stored_flush, append=True,
                          contact_provider=contact_provider, contact_every=contact_every)
-    return run(arrays, remaining, progress=progress, state=state, recorders=[store])
+    return run(arrays, remaining, progress=progress, state=state, recorders=[store], keep_history=False)
