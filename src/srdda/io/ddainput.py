@@ -131,7 +131,7 @@ class DDAInput:
         if units == "auto":
             system, how = self._detect_units(g)
         elif units in UNIT_SYSTEMS:
-            system, how = UNIT_SYSTEMS[units], f"units {units} as given"
+            system, how = UNIT_SYSTEMS[units], f"{units} as given"
         else:
             raise DDAInputError(f"{self.source}: unknown units {units!r}; choose auto or one of "
                                 + ", ".join(UNIT_SYSTEMS))
