@@ -20,8 +20,9 @@ from srdda import animation
 from srdda.cli import main
 from srdda.io.modelfile import load_model
 from srdda.io.results_store import load_checkpoint, read_results
+from srdda.paper import examples_dir
 
-ROD = Path(__file__).resolve().parents[1] / "examples" / "paper" / "rod.toml"
+ROD = examples_dir() / "paper" / "rod.toml"
 
 
 @pytest.fixture(scope="module")

@@ -5,9 +5,10 @@ import numpy as np
 import pytest
 
 from srdda.io.modelfile import ModelFileError, load_model, model_from_dict, save_model
-from srdda.paper import nunchaku, sine_wave
+from srdda.paper import examples_dir, nunchaku, sine_wave
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "paper"
+EXAMPLES = examples_dir() / "paper"
+USER_EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 def _same_arrays(a, b):
@@ -65,7 +66,7 @@ def test_bad_links_name_the_field():
 
 
 def test_hinged_wall_example_runs_and_keeps_its_hinge():
-    model, settings = load_model(EXAMPLES.parent / "constraints" / "hinged-wall.toml")
+    model, settings = load_model(USER_EXAMPLES / "constraints" / "hinged-wall.toml")
     from dataclasses import replace
 
     from srdda import run

@@ -1,7 +1,9 @@
 """The content of an existing DDA input (geometry + analysis files) and its srdda model.
 
 :mod:`srdda.io.legacy` (Shi's text files) and :mod:`srdda.io.ddaml` (DDA for
-Windows XML) both fill a :class:`DDAInput`; :meth:`DDAInput.to_model` cuts the
+Windows XML) both fill a :class:`DDAInput` in the file's own units;
+:meth:`DDAInput.in_si` converts it to SI, :meth:`DDAInput.use_default_analysis`
+fills what a missing analysis file would give, :meth:`DDAInput.to_model` cuts the
 blocks (:func:`srdda.geometry.cutting.cut_blocks`) and maps the parameters onto
 srdda's (the table is in ``docs/cutting.md``). Everything srdda does not
 support is reported with ``warnings.warn`` naming it.
@@ -21,14 +23,31 @@ import shapely
 from ..geometry.cutting import NO_JOINT, BlockCut, CuttingError, cut_blocks
 from ..model import JointMaterial, Material, Model, ModelError
 from ..settings import RunSettings
+from ..units import UNIT_SYSTEMS, UnitSystem, detect_unit_system
 
-__all__ = ["DDAInput", "DDAInputError", "domain_scale"]
+__all__ = ["DDAInput", "DDAInputError", "domain_scale", "DEFAULT_ANALYSIS"]
 
 MERGE_FACTOR = 1.25  # DC merges intersections closer than 1.25 e00 w0 (ntdda geometry code)
 
 
 class DDAInputError(ValueError):
     """An existing DDA input file is unreadable (the message names the file and the item)."""
+
+
+# The analysis of a geometry converted without its analysis file (SI; docs/cutting.md): a generic
+# hard rock, joints with friction only, a dynamic run of 1 s under srdda; edit the written model file.
+DEFAULT_ANALYSIS: dict[str, Any] = {
+    "density": 2600.0,  # kg/m3, every block material
+    "gravity": 9.81,  # m/s2 (unit weight = density x gravity)
+    "young": 10e9,  # Pa
+    "poisson": 0.25,  # plane stress, as DDA without <Planestrain>
+    "friction_angle": 30.0,  # degrees, every joint type; no cohesion, no tensile strength
+    "method": "srdda",
+    "dt": 1e-3,  # s
+    "steps": 1000,
+    "max_displacement_ratio": 0.01,  # g2
+    "penalty_factor": 50.0,  # penalty = 50 x E, as DDA for Windows
+}
 
 
 def read_input_text(path: Path) -> str:
@@ -54,7 +73,7 @@ def domain_scale(segments: np.ndarray) -> float:
 
 @dataclass
 class BlockMaterialSpec:
-    """A DDA block material as written in the files (units as the author used)."""
+    """A DDA block material as written in the files (units as the author used, until :meth:`DDAInput.in_si`)."""
 
     unit_mass: float
     unit_weight: float
@@ -96,6 +115,100 @@ class DDAInput:
     block_materials: list[BlockMaterialSpec] = field(default_factory=list)
     joint_materials: list[tuple[float, float, float]] = field(default_factory=list)  # (phi deg, c, t)
     load_histories: list[np.ndarray] = field(default_factory=list)  # (k, 3) rows (t, fx, fy)
+    method: str | None = None  # srdda's method; None: from ``rotation`` (the file's choice)
+    notes: list[str] = field(default_factory=list)  # how the input was read (unit conversion, defaults)
+
+    # -- units -----------------------------------------------------------------
+    def in_si(self, units: str = "auto") -> DDAInput:
+        """A copy in SI units, converted from ``units`` (a name of ``UNIT_SYSTEMS``, or "auto").
+
+        "auto" takes the system whose standard gravity the file's gravity is
+        (9.81 → SI, 32.2 → ft-lbf-slug, 386 → in-lbf); a file without gravity
+        is taken as SI. A gravity that matches no system is an error asking
+        for ``units``. The conversion is stated in :attr:`notes`.
+        """
+        g = self.gravity()
+        if units == "auto":
+            system, how = self._detect_units(g)
+        elif units in UNIT_SYSTEMS:
+            system, how = UNIT_SYSTEMS[units], f"{units} as given"
+        else:
+            raise DDAInputError(f"{self.source}: unknown units {units!r}; choose auto or one of "
+                                + ", ".join(UNIT_SYSTEMS))
+        out = self._scaled(system)
+        if system.name == "SI":
+            out.notes.append(f"units: {how} (m, kg, s, N, Pa): numbers kept as written")
+        else:
+            out.notes += [f"units: {how} ({system.units}); converted to SI:",
+                          f"  length x {system.length:.6g} m, time x {system.time:.6g} s, "
+                          f"force x {system.force:.6g} N, stress and moduli x {system.pressure:.6g} Pa,",
+                          f"  unit mass x {system.density:.6g} kg/m3, unit weight x {system.unit_weight:.6g} N/m3"
+                          + (f", gravity {g:.6g} -> {g * system.acceleration:.6g} m/s2" if g else "")]
+        return out
+
+    def _detect_units(self, g: float) -> tuple[UnitSystem, str]:
+        if g == 0.0:
+            return UNIT_SYSTEMS["SI"], "no gravity in the files to tell them, taken as SI"
+        system = detect_unit_system(g)
+        if system is None:
+            raise DDAInputError(f"{self.source}: gravity {g:g} (unit weight / unit mass) is standard gravity in "
+                                "none of the unit systems " + ", ".join(
+                                    f"{s.name} ({s.gravity:.4g})" for s in UNIT_SYSTEMS.values())
+                                + "; give the file's units (srdda convert --units)")
+        if system.name == "SI" and any(0 < m.unit_mass < 100 for m in self.block_materials):
+            warnings.warn(f"{self.source}: unit mass {min(m.unit_mass for m in self.block_materials):g} is small "
+                          "for kg/m3; if the file is in kN, m and t, give --units kN-m-t", stacklevel=3)
+        return system, f"gravity {g:g} is standard gravity in {system.name}"
+
+    def _scaled(self, u: UnitSystem) -> DDAInput:
+        """A copy with every dimensional number multiplied by its SI factor in ``u``."""
+        def material(m: BlockMaterialSpec) -> BlockMaterialSpec:
+            return dataclasses.replace(
+                m, unit_mass=m.unit_mass * u.density, unit_weight=m.unit_weight * u.unit_weight,
+                young=m.young * u.pressure, stress=tuple(v * u.pressure for v in m.stress),
+                velocity=(m.velocity[0] * u.velocity, m.velocity[1] * u.velocity, m.velocity[2] / u.time))
+
+        return dataclasses.replace(
+            self, joints=self.joints * u.length, material_lines=self.material_lines * u.length,
+            fixed_lines=self.fixed_lines * u.length, load_points=self.load_points * u.length,
+            measured_points=self.measured_points * u.length, hole_points=self.hole_points * u.length,
+            max_time_step=self.max_time_step * u.time,
+            gravity_acceleration=None if self.gravity_acceleration is None
+            else self.gravity_acceleration * u.acceleration,
+            block_materials=[material(m) for m in self.block_materials],
+            joint_materials=[(phi, c * u.pressure, t * u.pressure) for phi, c, t in self.joint_materials],
+            load_histories=[h * np.array([u.time, u.force, u.force]) for h in self.load_histories],
+            notes=list(self.notes))
+
+    # -- analysis defaults ----------------------------------------------------------
+    def use_default_analysis(self) -> None:
+        """Fill the analysis of a geometry read without its analysis file with :data:`DEFAULT_ANALYSIS` (SI).
+
+        Every block material number the material lines use and every joint
+        type get the default material; the defaults are listed in :attr:`notes`.
+        """
+        d = DEFAULT_ANALYSIS
+        n_block = int(max(self.material_line_types, default=1))
+        n_joint = int(max(self.joint_types, default=1))
+        self.block_materials = [BlockMaterialSpec(unit_mass=d["density"], unit_weight=d["density"] * d["gravity"],
+                                                  young=d["young"], poisson=d["poisson"])
+                                for _ in range(n_block)]
+        self.joint_materials = [(d["friction_angle"], 0.0, 0.0)] * n_joint
+        self.dynamic, self.method = True, d["method"]
+        self.n_steps, self.max_time_step = d["steps"], d["dt"]
+        self.max_displacement_ratio, self.penalty_factor = d["max_displacement_ratio"], d["penalty_factor"]
+        self.auto_time_step = self.auto_penalty = False
+        if len(self.load_points):
+            warnings.warn(f"{self.source}: {len(self.load_points)} load point(s) without the analysis file's "
+                          "force histories are ignored", stacklevel=2)
+            self.load_points = np.zeros((0, 2))
+        self.notes += [
+            "no analysis file: the default analysis (docs/cutting.md):",
+            f"  every block material: density {d['density']:g} kg/m3, E {d['young']:g} Pa, poisson "
+            f"{d['poisson']:g}, plane stress; gravity {d['gravity']:g} m/s2; every joint type: friction "
+            f"{d['friction_angle']:g} deg, no cohesion, no tension;",
+            f"  method {d['method']}, dt {d['dt']:g} s, {d['steps']} steps, g2 {d['max_displacement_ratio']:g}, "
+            f"penalty {d['penalty_factor']:g} x E"]
 
     # -- geometry ------------------------------------------------------------
     @property
@@ -152,7 +265,7 @@ class DDAInput:
         """
         young = max((m.young for m in self.block_materials), default=0.0)
         params: dict[str, Any] = {
-            "method": "dda0" if self.rotation == "linear" else "dda1",
+            "method": self.method or ("dda0" if self.rotation == "linear" else "dda1"),
             "dt": self.max_time_step,
             "n_steps": self.n_steps,
             "penalty": self.penalty_factor * young,

@@ -195,12 +195,16 @@ def _history(el: ET.Element, path: Path) -> np.ndarray:
     return table
 
 
-def read_ddaml(geometry: str | Path, analysis: str | Path) -> DDAInput:
-    """Read a DDAML geometry / analysis pair."""
-    gpath, apath = Path(geometry), Path(analysis)
+def read_ddaml(geometry: str | Path, analysis: str | Path | None = None) -> DDAInput:
+    """Read a DDAML geometry / analysis pair, in the files' units.
+
+    Without ``analysis`` only the geometry is read (no materials, no run
+    parameters): :meth:`DDAInput.use_default_analysis` fills them.
+    """
+    gpath = Path(geometry)
     g = _read_geometry(gpath)
     data = DDAInput(
-        source=f"{gpath.name}+{apath.name}", edge_node_ratio=g["e00"],
+        source=gpath.name, edge_node_ratio=g["e00"],
         joints=np.array(g["joints"], dtype=float).reshape(-1, 4),
         joint_types=np.array(g["types"], dtype=np.int64),
         material_lines=np.array(g["matlines"], dtype=float).reshape(-1, 4),
@@ -210,5 +214,7 @@ def read_ddaml(geometry: str | Path, analysis: str | Path) -> DDAInput:
         measured_points=np.array(g["measured"], dtype=float).reshape(-1, 2),
         hole_points=np.array(g["hole"], dtype=float).reshape(-1, 2),
     )
-    _read_analysis(apath, data)
+    if analysis is not None:
+        _read_analysis(Path(analysis), data)
+        data.source = f"{gpath.name}+{Path(analysis).name}"
     return data

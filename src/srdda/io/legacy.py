@@ -51,8 +51,12 @@ class _Reader:
         return int(v)
 
 
-def read_legacy(geometry: str | Path, analysis: str | Path) -> DDAInput:
-    """Read a legacy ``.geo`` / ``.ana`` pair."""
+def read_legacy(geometry: str | Path, analysis: str | Path | None = None) -> DDAInput:
+    """Read a legacy ``.geo`` / ``.ana`` pair, in the files' units.
+
+    Without ``analysis`` only the geometry is read (no materials, no run
+    parameters): :meth:`DDAInput.use_default_analysis` fills them.
+    """
     g = _Reader(Path(geometry))
     e00 = float(g.take(1, "edge-node distance")[0])
     n_joints = g.count("number of joints")
@@ -71,8 +75,23 @@ def read_legacy(geometry: str | Path, analysis: str | Path) -> DDAInput:
     hole = g.take(2 * n_hole, "hole points").reshape(-1, 2)
     if g.pos != len(g.values):
         warnings.warn(f"{g.path}: {len(g.values) - g.pos} trailing number(s) ignored", stacklevel=2)
+    if n_load:
+        warnings.warn(f"{g.path}: load points carry no forces in the legacy format (as in DDA for Windows); "
+                      "they are ignored", stacklevel=2)
+    data = DDAInput(
+        source=Path(geometry).name, edge_node_ratio=e00,
+        joints=joints[:, :4], joint_types=joints[:, 4].astype(np.int64),
+        material_lines=mat[:, :4], material_line_types=mat[:, 4].astype(np.int64),
+        fixed_lines=fixed, measured_points=meas, hole_points=hole)
+    if analysis is not None:
+        _read_analysis(Path(analysis), data)
+        data.source = f"{Path(geometry).name}+{Path(analysis).name}"
+    return data
 
-    a = _Reader(Path(analysis))
+
+def _read_analysis(path: Path, data: DDAInput) -> None:
+    """Fill ``data``'s run parameters and materials from a legacy ``.ana`` file."""
+    a = _Reader(path)
     kind = a.count("analysis type (0 static, 1 dynamic)")
     n_steps = a.count("number of time steps")
     n_bm = a.count("number of block materials")
@@ -84,22 +103,13 @@ def read_legacy(geometry: str | Path, analysis: str | Path) -> DDAInput:
         raise DDAInputError(f"{a.path}: file ends while reading block and joint materials")
     if extra:
         warnings.warn(f"{a.path}: {extra} number(s) of time-dependent fixed/load point data are not "
-                      "supported (ignored)", stacklevel=2)
+                      "supported (ignored)", stacklevel=3)
         a.take(extra, "time-dependent data")
     props = a.take(13 * n_bm, "block materials").reshape(-1, 13)
     jprops = a.take(3 * n_jm, "joint materials").reshape(-1, 3)
-    if n_load:
-        warnings.warn(f"{g.path}: load points carry no forces in the legacy format (as in DDA for Windows); "
-                      "they are ignored", stacklevel=2)
-    return DDAInput(
-        source=f"{Path(geometry).name}+{Path(analysis).name}", edge_node_ratio=e00,
-        joints=joints[:, :4], joint_types=joints[:, 4].astype(np.int64),
-        material_lines=mat[:, :4], material_line_types=mat[:, 4].astype(np.int64),
-        fixed_lines=fixed, measured_points=meas, hole_points=hole,
-        dynamic=kind == 1, n_steps=n_steps, max_displacement_ratio=g2, max_time_step=dt,
-        penalty_factor=50.0, auto_time_step=True, auto_penalty=True,
-        block_materials=[BlockMaterialSpec(unit_mass=p[0], unit_weight=p[1], young=p[2], poisson=p[3],
-                                           stress=tuple(p[4:7]), strain=tuple(p[7:10]), velocity=tuple(p[10:13]))
-                         for p in props],
-        joint_materials=[tuple(map(float, j)) for j in jprops],
-    )
+    data.dynamic, data.n_steps, data.max_displacement_ratio, data.max_time_step = kind == 1, n_steps, g2, dt
+    data.penalty_factor, data.auto_time_step, data.auto_penalty = 50.0, True, True
+    data.block_materials = [BlockMaterialSpec(unit_mass=p[0], unit_weight=p[1], young=p[2], poisson=p[3],
+                                              stress=tuple(p[4:7]), strain=tuple(p[7:10]),
+                                              velocity=tuple(p[10:13])) for p in props]
+    data.joint_materials = [tuple(map(float, j)) for j in jprops]

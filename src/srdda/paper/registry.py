@@ -1,6 +1,6 @@
 """Registry of the paper's examples: how to build each, and how to tabulate it.
 
-An example is a model file under ``examples/paper/`` (or a Python builder)
+An example is a model file under ``paper/`` of :func:`examples_dir` (or a Python builder)
 plus a ``tables(results)`` function that turns one :class:`~srdda.Result` per
 method into rows ``{"table", "quantity", "step", "method", "ours", "paper",
 "exact"}`` (``step`` None where a row is not tied to a step, ``exact`` None
@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -24,11 +25,19 @@ Row = dict[str, Any]
 
 
 def examples_dir() -> Path:
-    """The ``examples/`` folder: $SRDDA_EXAMPLES, else the one beside the source tree."""
+    """The shipped example model files: $SRDDA_EXAMPLES, else the package data ``srdda/data/examples``.
+
+    They are package data (not a folder of the source tree) so that an
+    installed wheel finds them from any working directory.
+    """
     env = os.environ.get("SRDDA_EXAMPLES")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parents[3] / "examples"
+    root = resources.files("srdda").joinpath("data", "examples")
+    if not isinstance(root, Path):  # a zipped install: the model files are not files on disk
+        raise RuntimeError(f"srdda's example model files are not on the file system ({root}); "
+                           "install srdda unzipped (pip does)")
+    return root
 
 
 @dataclass(frozen=True)
@@ -38,7 +47,7 @@ class Example:
     name: str
     title: str
     tables: Callable[[dict[str, Result]], list[Row]]
-    model_file: str | None = None  # under examples/paper/
+    model_file: str | None = None  # under examples_dir() / "paper"
     builder: Callable[[str], tuple[Model, RunSettings]] | None = None
     notes: str = ""  # the choices made where the paper is silent, for the report (Markdown)
 
