@@ -199,7 +199,7 @@ def _check_faces_planar_and_simple(batch: _Batch, size: np.ndarray) -> None:
     tol = PLANARITY_TOLERANCE * size[batch.face_block]  # per face
     flat = np.flatnonzero(area <= tol * size[batch.face_block])
     if len(flat):
-        raise PolyhedronError(f"{batch.face(flat[0])} has zero area (its vertices are collinear)")
+        raise PolyhedronError(f"{batch.face(flat[0])} has zero area (collinear vertices or an outline that cancels itself)")
     unit = normal / area[:, None]
     dist = np.abs(np.einsum("ij,ij->i", p, unit[rings.owner]))
     off = np.flatnonzero(dist > tol[rings.owner])
@@ -220,7 +220,7 @@ def _check_faces_planar_and_simple(batch: _Batch, size: np.ndarray) -> None:
     corners = np.isin(rings.owner, big)
     own = rings.owner[corners]
     uv = np.column_stack([np.einsum("ij,ij->i", p[corners], e1[own]), np.einsum("ij,ij->i", p[corners], e2[own])])
-    polys = shapely.polygons(shapely.linearrings(uv, indices=own))
+    polys = shapely.polygons(shapely.linearrings(uv, indices=np.searchsorted(big, own)))
     bad = np.flatnonzero(~shapely.is_valid(polys))
     if len(bad):
         raise PolyhedronError(f"{batch.face(big[bad[0]])} is not a simple polygon "
@@ -445,20 +445,19 @@ def polyhedron_moments(vertices: np.ndarray, mesh: PolyhedronMesh) -> Polyhedron
     vol6 = rows[0]
     vol6[:] = a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2]) + a[2] * (b[0] * c[1] - b[1] * c[0])
     np.multiply(vol6, s, out=rows[1:4])
-    for k, (i, j) in enumerate(zip(_II, _JJ)):  # the six distinct second moments (Tonon 2004, Eqs. 2-3)
+    for k, (i, j) in enumerate(zip(_I, _J)):  # the six distinct second moments (Tonon 2004, Eqs. 2-3)
         rows[4 + k] = vol6 * (a[i] * a[j] + b[i] * b[j] + c[i] * c[j] + s[i] * s[j])
     sums = np.add.reduceat(rows, mesh.tri_ptr[:-1], axis=1)
     volume = sums[0] / 6.0
     centre = (sums[1:4] / 24.0 / volume).T  # about ref
-    central = sums[4:].T / 120.0 - volume[:, None] * centre[:, _II] * centre[:, _JJ]
+    central = sums[4:].T / 120.0 - volume[:, None] * centre[:, _I] * centre[:, _J]
     second = np.empty((len(volume), 3, 3))
-    second[:, _II, _JJ] = central
-    second[:, _JJ, _II] = central
+    second[:, _I, _J] = central
+    second[:, _J, _I] = central
     return PolyhedronMoments(volume=volume, centroid=centre + ref, second=second)
 
 
-_II = np.array([0, 1, 2, 1, 2, 0])  # Voigt pairs (xx, yy, zz, yz, zx, xy)
-_JJ = np.array([0, 1, 2, 2, 0, 1])
+_I, _J = np.triu_indices(3)  # the six distinct entries of a symmetric 3x3 tensor
 _BOX_FACES = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
 
 
