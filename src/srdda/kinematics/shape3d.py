@@ -56,6 +56,8 @@ def _linear_columns() -> np.ndarray:
 
 
 _G = _linear_columns()
+# ∫ T_kᵀ T_l dV = Σ_ab (Σ_i G_k[i,a] G_l[i,b]) S[a,b]: one (81, 9) matrix applied to the flattened S
+_MASS_FROM_SECOND = np.einsum("kia,lib->klab", _G, _G).reshape(81, 9)
 
 
 def shape_function_3d(lever: np.ndarray) -> np.ndarray:
@@ -84,7 +86,7 @@ def block_mass_matrix_3d(volume: np.ndarray, second: np.ndarray) -> np.ndarray:
     nb = len(volume)
     M = np.zeros((nb, NDOF_3D, NDOF_3D))
     M[:, 0, 0] = M[:, 1, 1] = M[:, 2, 2] = volume
-    M[:, 3:, 3:] = np.einsum("kia,lib,nab->nkl", _G, _G, second)
+    M[:, 3:, 3:] = (second.reshape(nb, 9) @ _MASS_FROM_SECOND.T).reshape(nb, 9, 9)
     return M
 
 
