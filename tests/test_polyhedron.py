@@ -207,6 +207,8 @@ def test_mesh_errors_name_the_block():
         PolyhedronMesh.from_blocks([good, (CUBE_V, CUBE_F[:5])], labels=["first", "second"])
     with pytest.raises(PolyhedronError, match="at least one block"):
         PolyhedronMesh.from_blocks([])
+    with pytest.raises(PolyhedronError, match="got 1 labels for 2 blocks"):
+        PolyhedronMesh.from_blocks([good, good], labels=["first"])
 
 
 def test_constructor_errors():
@@ -239,6 +241,21 @@ def test_meshio_round_trip(tmp_path):
     assert np.allclose(m.volume, expected.volume, rtol=1e-14)
     assert np.allclose(m.centroid, expected.centroid, rtol=1e-14)
     assert np.allclose(m.second, expected.second, rtol=0, atol=1e-14)
+
+
+def test_meshio_interleaved_surfaces():
+    # two boxes whose points and faces are shuffled together: each surface is found and renumbered
+    rng = np.random.default_rng(5)
+    (av, af), (bv, bf) = box([0, 0, 0], [1, 1, 1]), box([3, 0, 0], [5, 1, 2])
+    points = np.vstack([av, bv])
+    quads = np.array([*af, *(f + 8 for f in bf)])
+    perm = rng.permutation(16)  # new position of each point
+    shuffled = np.empty_like(points)
+    shuffled[perm] = points
+    blocks = polyhedra_from_meshio(meshio.Mesh(shuffled, [("quad", perm[quads][rng.permutation(12)])]))
+    m = _moments(*blocks)
+    assert sorted(m.volume.tolist()) == [1.0, 4.0]  # exact: unit and 2x1x2 boxes
+    assert sorted(m.centroid[:, 0].tolist()) == [0.5, 4.0]
 
 
 def test_meshio_stl_triangles(tmp_path):

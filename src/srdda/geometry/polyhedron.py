@@ -11,9 +11,12 @@ Integrals (divergence theorem): each face's fan triangle (v0, vi, vi+1) and a
 reference point O of its block span a signed tetrahedron; their signed sum is
 the block exactly, for planar faces even when a face or the block is concave
 (the signed fan of a simple planar polygon sums to its indicator function).
-Per tetrahedron with O at the origin and vertices a, b, c (Tonon 2004,
-"Explicit exact formulas for the 3-D tetrahedron inertia tensor in terms of its
-vertex coordinates", J. Math. Stat. 1(1), Eqs. 2-3):
+Per tetrahedron with O at the origin and vertices a, b, c (F. Tonon, "Explicit
+exact formulas for the 3-D tetrahedron inertia tensor in terms of its vertex
+coordinates", J. Math. Stat. 1(1):8-11, 2005; written in the covariance form of
+J. Blow & A. Binstock, "How to find the inertia tensor of a 3D solid body
+represented by a triangle mesh", 2004: the canonical tetrahedron's ∫x_i x_j
+mapped by the linear map [a b c]):
 
     V      = det[a, b, c] / 6
     ∫ x dV = V (a + b + c) / 4
@@ -403,6 +406,8 @@ class PolyhedronMesh:
             raise PolyhedronError("a polyhedron mesh needs at least one block")
         if labels is None:
             labels = [str(b) for b in range(len(blocks))]
+        if len(labels) != len(blocks):
+            raise PolyhedronError(f"got {len(labels)} labels for {len(blocks)} blocks")
         normalized = _normalize_blocks(blocks, labels)
         n_vert = np.array([len(v) for v, _ in normalized])
         block_ptr = np.concatenate([[0], np.cumsum(n_vert)])
@@ -432,7 +437,7 @@ def polyhedron_moments(vertices: np.ndarray, mesh: PolyhedronMesh) -> Polyhedron
     """Exact volume, centroid and central second moments of every block at ``vertices`` (nv, 3).
 
     Signed tetrahedra (block reference point, fan triangle) summed per block
-    (Tonon 2004; see the module docstring). Vertices are shifted per block by
+    (Tonon 2005; see the module docstring). Vertices are shifted per block by
     their mean first, so blocks far from the origin keep full precision.
     """
     starts = mesh.block_ptr[:-1]
@@ -445,7 +450,7 @@ def polyhedron_moments(vertices: np.ndarray, mesh: PolyhedronMesh) -> Polyhedron
     vol6 = rows[0]
     vol6[:] = a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2]) + a[2] * (b[0] * c[1] - b[1] * c[0])
     np.multiply(vol6, s, out=rows[1:4])
-    for k, (i, j) in enumerate(zip(_I, _J)):  # the six distinct second moments (Tonon 2004, Eqs. 2-3)
+    for k, (i, j) in enumerate(zip(_I, _J)):  # the six distinct second moments (Tonon 2005)
         rows[4 + k] = vol6 * (a[i] * a[j] + b[i] * b[j] + c[i] * c[j] + s[i] * s[j])
     sums = np.add.reduceat(rows, mesh.tri_ptr[:-1], axis=1)
     volume = sums[0] / 6.0
@@ -502,45 +507,44 @@ def polyhedra_from_meshio(mesh: object, label: str = "mesh") -> list[Block3D]:
 
     Surfaces are connected through shared point indices (meshio's STL reader
     merges coincident points); touching blocks must therefore not share mesh
-    points. Point and line cells are ignored; volume cells are an error.
-    Blocks are labelled ``f"{label} surface {k}"`` in order of their first face.
+    points. Vertex and line cells are ignored; any other cell type (volume or
+    higher-order cells) is an error. Blocks are labelled
+    ``f"{label} surface {k}"`` in order of their first face, and validated as
+    :func:`normalize_polyhedron` does.
     """
-    import meshio  # noqa: PLC0415 (imported only here: reading surface meshes is optional)
-
     points = np.asarray(mesh.points, dtype=float)
-    if points.ndim != 2 or points.shape[1] not in (2, 3):
-        raise PolyhedronError(f"{label}: mesh points must be 3D coordinates")
-    if points.shape[1] == 2:
-        raise PolyhedronError(f"{label}: the mesh is 2D; polyhedral blocks need 3D points")
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise PolyhedronError(f"{label}: mesh points must be 3D coordinates (x, y, z)")
     faces: list[np.ndarray] = []
     for cells in mesh.cells:
         kind = cells.type
-        dim = meshio._mesh.topological_dimension.get(kind, None)  # noqa: SLF001 (meshio's own cell table)
         if kind in _SURFACE_CELLS or kind.startswith("polygon"):
             faces.extend(np.asarray(cells.data, dtype=np.int64))
-        elif dim is not None and dim <= 1:
-            continue
-        else:
+        elif not (kind == "vertex" or kind.startswith("line")):
             raise PolyhedronError(f"{label}: cells of type '{kind}' are not surface polygons; give the blocks' "
                                   f"surfaces as triangle, quad or polygon cells")
     if not faces:
         raise PolyhedronError(f"{label}: the mesh has no triangle, quad or polygon cells")
-    flat = np.concatenate(faces)
-    owner = np.repeat(np.arange(len(faces)), [len(f) for f in faces])
-    n_pts = len(points)
-    # faces and points in one graph: face k is node n_pts + k
-    graph = coo_matrix((np.ones(len(flat)), (flat, n_pts + owner)), shape=(n_pts + len(faces),) * 2)
+    rings = _FaceRings.of(faces)
+    n_pts, n_faces = len(points), len(faces)
+    # points and faces in one graph (face k is node n_pts + k); each component is one surface
+    graph = coo_matrix((np.ones(len(rings.vertex)), (rings.vertex, n_pts + rings.owner)),
+                       shape=(n_pts + n_faces,) * 2)
     _, comp = connected_components(graph, directed=False)
-    face_comp = comp[n_pts:]
-    _, first_face, order = np.unique(face_comp, return_index=True, return_inverse=True)
-    rank = np.argsort(np.argsort(first_face))  # label surfaces in order of their first face
-    face_surface = rank[order.ravel()]
-    blocks = []
-    for k in range(len(first_face)):
-        members = np.flatnonzero(face_surface == k)
-        used = np.unique(np.concatenate([faces[m] for m in members]))
-        local = np.full(n_pts, -1)
-        local[used] = np.arange(len(used))
-        blocks.append(normalize_polyhedron(points[used], [local[faces[m]] for m in members],
-                                           f"{label} surface {k}"))
-    return blocks
+    _, first_face, face_comp = np.unique(comp[n_pts:], return_index=True, return_inverse=True)
+    surface_rank = np.argsort(np.argsort(first_face))  # surfaces numbered in order of their first face
+    face_surface = surface_rank[face_comp.ravel()]
+    n_surfaces = len(first_face)
+    # the points of each surface, numbered locally in order of their global index
+    used = np.unique(rings.vertex)
+    point_surface = np.full(n_pts, -1)
+    point_surface[rings.vertex] = face_surface[rings.owner]
+    order = used[np.lexsort((used, point_surface[used]))]
+    point_ptr = np.concatenate([[0], np.cumsum(np.bincount(point_surface[order], minlength=n_surfaces))])
+    local = np.empty(n_pts, dtype=np.int64)
+    local[order] = np.arange(len(order)) - point_ptr[point_surface[order]]
+    face_order = np.argsort(face_surface, kind="stable")
+    face_ptr = np.concatenate([[0], np.cumsum(np.bincount(face_surface, minlength=n_surfaces))])
+    blocks = [(points[order[point_ptr[k]:point_ptr[k + 1]]],
+               [local[faces[m]] for m in face_order[face_ptr[k]:face_ptr[k + 1]]]) for k in range(n_surfaces)]
+    return _normalize_blocks(blocks, [f"{label} surface {k}" for k in range(n_surfaces)])
