@@ -111,6 +111,19 @@ def test_mass_matrix_matches_quadrature(block, parts):
     assert np.all(np.linalg.eigvalsh(M) > 0)
 
 
+def test_mass_matrix_rotation_block_is_the_inertia_tensor():
+    # columns e_k × r: ∫ (e_k × r)·(e_l × r) dV = tr(S) δ_kl - S_kl, the inertia tensor per unit density;
+    # rotation-strain coupling of the εx column: ∫ (e_k × r)_x X dV = (0, S_xz, -S_xy)_k
+    mesh = PolyhedronMesh.from_blocks([prism(L_SHAPE, 0.0, 0.3)])
+    m = polyhedron_moments(mesh.vertices, mesh)
+    S = m.second[0]
+    M = block_mass_matrix_3d(m.volume, m.second)[0]
+    assert np.allclose(M[3:6, 3:6], np.trace(S) * np.eye(3) - S, rtol=0, atol=1e-15)
+    assert np.allclose(M[3:6, 6], [0, S[0, 2], -S[0, 1]], rtol=0, atol=1e-15)
+    assert np.allclose(M[:3, :3], m.volume[0] * np.eye(3), rtol=0, atol=0)
+    assert np.array_equal(M[:3, 3:], np.zeros((3, 9)))  # ∫X = 0 about the centroid
+
+
 def test_mass_matrix_of_a_prism_contains_the_2d_one():
     # For in-plane unknowns (u0, v0, rz, εx, εy, γxy) of an extruded polygon, T is the 2D T (Eq. 52) and
     # the w row is zero, so that block of the 3D mass matrix is the 2D one times the thickness.
