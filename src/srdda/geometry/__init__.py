@@ -6,3 +6,8 @@ from .polygon import BlockMoments, PolygonError, block_moments, next_vertex_inde
 __all__ = ["NO_JOINT", "BlockCut", "BlockMoments", "CuttingError", "JointSet", "PolygonError", "block_moments",
            "circular_opening", "cut_blocks", "joint_traces", "next_vertex_index", "normalize_polygon",
            "polygonal_opening"]
+from .polyhedron import (PLANARITY_TOLERANCE, PolyhedronError, PolyhedronMesh, PolyhedronMoments, box,
+                         normalize_polyhedron, polyhedra_from_meshio, polyhedron_moments, prism)
+
+__all__ += ["PLANARITY_TOLERANCE", "PolyhedronError", "PolyhedronMesh", "PolyhedronMoments", "box",
+            "normalize_polyhedron", "polyhedra_from_meshio", "polyhedron_moments", "prism"]

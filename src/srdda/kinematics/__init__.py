@@ -8,3 +8,12 @@ __all__ = [
     "rotate_symmetric_components", "rotation_matrix", "secant_shape_function", "shape_function",
     "sr_decomposition", "sr_decomposition_3d", "strain_selector",
 ]
+from .shape3d import (NDOF_3D, block_mass_matrix_3d, compose_rotations, elasticity_matrix_3d,
+                      rodrigues_coefficients, rotation_matrix_3d, shape_function_3d, skew, strain_selector_3d)
+from .update3d import point_displacement_3d, rotate_symmetric_components_3d, secant_shape_function_3d
+
+__all__ += [
+    "NDOF_3D", "block_mass_matrix_3d", "compose_rotations", "elasticity_matrix_3d", "point_displacement_3d",
+    "rodrigues_coefficients", "rotate_symmetric_components_3d", "rotation_matrix_3d", "secant_shape_function_3d",
+    "shape_function_3d", "skew", "strain_selector_3d",
+]
