@@ -35,6 +35,8 @@ TWO_DIMENSIONAL = {
     "report.py": "the report of the paper's 2D examples",
     "cli.py": "the command line (figure sizes, 2D outputs)",
     "cli_results.py": "the command line (figure sizes, 2D outputs)",
+    "cases/": "verification problems: models of a given dimension",
+    "verify/": "verification problems: models of a given dimension",
 }
 DIMENSION_NUMBERS = {2, 3, 6, 12}
 SIZING_CALLS = {"zeros", "ones", "empty", "full", "eye", "identity", "reshape", "broadcast_to", "tile", "repeat"}

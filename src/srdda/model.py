@@ -7,7 +7,7 @@ that the time loop uses. Units are SI: m, kg, s, N, Pa.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Literal
 
@@ -17,7 +17,10 @@ import shapely
 from .constraints.data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
 from .history import HistoryError, MotionHistory, TimeHistory
 from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon
-from .kinematics.blocktype import PLANE, BlockType, block_type_of_dimension
+from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_polyhedron, polyhedron_covers,
+                                  polyhedron_moments, prism)
+from .kinematics.blocktype import PLANE, SOLID, BlockType, block_type_of_dimension
+from .kinematics.shape3d import elasticity_matrix_3d
 
 __all__ = ["JointMaterial", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
 
@@ -86,11 +89,12 @@ Load = TimeHistory  # a force (N) as a function of time: constant, table, sine o
 class _Block:
     vertices: np.ndarray
     material: int
-    velocity: tuple[float, float, float]
-    stress: tuple[float, float, float]
+    velocity: tuple[float, ...]  # translation then rotation rates
+    stress: tuple[float, ...]
     name: str
     fixed: bool = False
     edge_joints: tuple[str | None, ...] | None = None  # joint material of edge i (vertex i to i+1)
+    faces: list[np.ndarray] | None = None  # a polyhedron's outward faces (3D); None for a polygon
 
 
 @dataclass(frozen=True)
@@ -128,6 +132,7 @@ class ModelArrays:
     joint_properties: np.ndarray  # (nj, 3): friction angle (rad), cohesion (Pa), tensile strength (Pa)
     joint_by_materials: np.ndarray  # (nm, nm) joint index for a pair of block materials
     links: ConstraintArrays  # hinges, springs, prescribed motion
+    mesh: PolyhedronMesh | None = None  # the faces of 3D blocks (None in 2D)
 
     @property
     def n_blocks(self) -> int:
@@ -147,16 +152,23 @@ class ModelArrays:
         """The blocks' type, by the dimension of the vertices."""
         return block_type_of_dimension(self.vertices.shape[1])
 
-    def moments(self, vertices: np.ndarray) -> BlockMoments:
-        """Exact block integrals of a configuration of this model's blocks."""
+    def moments(self, vertices: np.ndarray) -> BlockMoments | PolyhedronMoments:
+        """Exact block integrals of a configuration of this model's blocks (polygons, or polyhedra in 3D)."""
+        if self.mesh is not None:
+            return polyhedron_moments(vertices, self.mesh)
         return block_moments(vertices, self.block_ptr, self.vertex_block, self.next_vertex)
 
 
 @dataclass
 class Model:
-    """A 2D block system. Build it with the ``add_*`` methods; SI units throughout."""
+    """A block system: polygons (2D, :meth:`add_block`) or polyhedra (3D, :meth:`add_polyhedron`).
 
-    gravity: tuple[float, float] = (0.0, 0.0)
+    Build it with the ``add_*`` methods; SI units throughout. The dimension is
+    the blocks': a model holds polygons or polyhedra, not both; gravity and
+    every point have as many components.
+    """
+
+    gravity: tuple[float, ...] = (0.0, 0.0)
     materials: dict[str, Material] = field(default_factory=dict)
     blocks: list[_Block] = field(default_factory=list)
     fixed_points: list[tuple[int, np.ndarray, float]] = field(default_factory=list)
@@ -207,6 +219,7 @@ class Model:
         label = name or f"block {index}"
         if material not in self.materials:
             raise ModelError(f"{label}: unknown material {material!r}")
+        self._same_dimension(PLANE.dim, label)
         raw = np.asarray(vertices, dtype=float)
         verts = normalize_polygon(vertices, label)
         joints: tuple[str | None, ...] | None = None
@@ -232,18 +245,60 @@ class Model:
                                   joints))
         return index
 
+    def add_polyhedron(
+        self,
+        vertices: Sequence[Sequence[float]],
+        faces: Sequence[Sequence[int]],
+        material: str,
+        velocity: Sequence[float] = (0.0, 0.0, 0.0),
+        angular_velocity: Sequence[float] = (0.0, 0.0, 0.0),
+        stress: Sequence[float] = (0.0,) * 6,
+        name: str | None = None,
+        fixed: bool = False,
+    ) -> int:
+        """Add a polyhedral block (3D): vertices (n, 3) and faces as lists of vertex indices; returns its index.
+
+        The surface must be closed and manifold with planar faces; their
+        orientation is made consistent and outward (see
+        :func:`srdda.geometry.polyhedron.normalize_polyhedron`). ``stress`` is
+        (σx, σy, σz, τyz, τzx, τxy) in Pa; ``angular_velocity`` (ωx, ωy, ωz) in rad/s.
+        ``srdda.geometry.polyhedron.box`` and ``prism`` make (vertices, faces).
+        """
+        index = len(self.blocks)
+        label = name or f"block {index}"
+        if material not in self.materials:
+            raise ModelError(f"{label}: unknown material {material!r}")
+        self._same_dimension(SOLID.dim, label)
+        verts, outward = normalize_polyhedron(vertices, faces, label)
+        v, w, s = (tuple(float(a) for a in x) for x in (velocity, angular_velocity, stress))
+        if len(v) != SOLID.dim or len(w) != SOLID.dim:
+            raise ModelError(f"{label}: velocity and angular_velocity are [x, y, z] vectors")
+        if len(s) != SOLID.n_strain:
+            raise ModelError(f"{label}: stress must be [sx, sy, sz, tyz, tzx, txy]")
+        mat_index = list(self.materials).index(material)
+        self.blocks.append(_Block(verts, mat_index, (*v, *w), s, label, bool(fixed), None, outward))
+        return index
+
+    @property
+    def dim(self) -> int:
+        """2 for polygons, 3 for polyhedra (2 while the model has no block)."""
+        return SOLID.dim if self.blocks and self.blocks[0].faces is not None else PLANE.dim
+
+    def _same_dimension(self, dim: int, label: str) -> None:
+        if self.blocks and self.dim != dim:
+            raise ModelError(f"{label}: a model holds polygons (2D) or polyhedra (3D), not both")
+
     def block_at(self, point: Sequence[float], what: str = "point") -> int:
         """Index of the block containing ``point`` (on its boundary counts)."""
-        p = shapely.Point(point)
-        for i, b in enumerate(self.blocks):
-            if shapely.Polygon(b.vertices).buffer(1e-9 * _scale(b.vertices)).covers(p):
-                return i
-        raise ModelError(f"{what} at {tuple(point)} lies in no block")
+        found = self.blocks_at(point)
+        if not found:
+            raise ModelError(f"{what} at {tuple(point)} lies in no block")
+        return found[0]
 
     def _resolve(self, point: Sequence[float], block: int | None, what: str) -> tuple[int, np.ndarray]:
         p = np.asarray(point, dtype=float)
-        if p.shape != (2,) or not np.all(np.isfinite(p)):
-            raise ModelError(f"{what}: a point is [x, y] with finite coordinates")
+        if p.shape != (self.dim,) or not np.all(np.isfinite(p)):
+            raise ModelError(f"{what}: a point has {self.dim} finite coordinates in this {self.dim}D model")
         if block is None:
             block = self.block_at(p, what)
         elif not 0 <= block < len(self.blocks):
@@ -281,6 +336,9 @@ class Model:
     # -- constraints, springs, driven points (srdda.constraints) -------------
     def blocks_at(self, point: Sequence[float]) -> list[int]:
         """Indices of every block containing ``point`` (on a boundary counts)."""
+        if self.dim == SOLID.dim:
+            return [i for i, b in enumerate(self.blocks)
+                    if polyhedron_covers(b.vertices, b.faces, np.asarray(point, dtype=float))]
         p = shapely.Point(point)
         return [i for i, b in enumerate(self.blocks)
                 if shapely.Polygon(b.vertices).buffer(1e-9 * _scale(b.vertices)).covers(p)]
@@ -375,11 +433,52 @@ class Model:
         except HistoryError as exc:
             raise ModelError(f"base acceleration: {exc}") from exc
 
+    def extruded(self, thickness: float = 1.0) -> Model:
+        """This 2D model as 3D prisms from z = -thickness/2 to thickness/2, every point at z = 0.
+
+        A 2D model is per metre of thickness: with ``thickness`` 1 m masses,
+        stiffnesses and forces carry over unchanged, and the 3D model moving in
+        its plane is the 2D one (gravity, velocities, loads get a zero z
+        component; stresses (σx, σy, τxy) become (σx, σy, 0, 0, 0, τxy)).
+        """
+        if self.dim != PLANE.dim:
+            raise ModelError("only a 2D model can be extruded")
+        if not thickness > 0:
+            raise ModelError(f"extrusion thickness must be > 0, got {thickness}")
+        out = Model(gravity=(*self.gravity, 0.0), materials=dict(self.materials),
+                    joint_materials=dict(self.joint_materials), joint_map=dict(self.joint_map),
+                    default_joint=self.default_joint)
+        mats = list(self.materials)
+        half = 0.5 * thickness
+        for b in self.blocks:
+            sx, sy, txy = b.stress
+            out.add_polyhedron(*prism(b.vertices, -half, half, b.name), mats[b.material],
+                               velocity=(*b.velocity[:2], 0.0), angular_velocity=(0.0, 0.0, b.velocity[2]),
+                               stress=(sx, sy, 0.0, 0.0, 0.0, txy), name=b.name, fixed=b.fixed)
+
+        def at(p: np.ndarray) -> np.ndarray:
+            return np.append(p, 0.0)
+
+        out.fixed_points = [(i, at(p), k) for i, p, k in self.fixed_points]
+        out.point_loads = [(i, at(p), load.padded(SOLID.dim)) for i, p, load in self.point_loads]
+        out.point_springs = [(a, at(pa), b, at(pb), k) for a, pa, b, pb, k in self.point_springs]
+        out.measured_points = [(i, at(p)) for i, p in self.measured_points]
+        out.hinges = [replace(h, point_a=at(h.point_a), point_b=at(h.point_b)) for h in self.hinges]
+        out.springs = [replace(s, point_a=at(s.point_a), point_b=at(s.point_b)) for s in self.springs]
+        out.prescribed = [replace(p, point=at(p.point), history=p.history.padded(SOLID.dim),
+                                  components=(*p.components, False)) for p in self.prescribed]
+        if self.base_acceleration is not None:
+            out.base_acceleration = self.base_acceleration.padded(SOLID.dim)
+        return out
+
     # -- compiling ---------------------------------------------------------
     def arrays(self) -> ModelArrays:
         """Flat arrays of the whole model for the time loop."""
         if not self.blocks:
             raise ModelError("the model has no blocks")
+        bt = block_type_of_dimension(self.dim)
+        if len(self.gravity) != bt.dim:
+            raise ModelError(f"gravity must have {bt.dim} components in a {bt.dim}D model, got {len(self.gravity)}")
         mats = list(self.materials.values())
         counts = [len(b.vertices) for b in self.blocks]
         groups: list[list[np.ndarray]] = [[], [], [], [], []]
@@ -401,12 +500,21 @@ class Model:
         sizes = [len(g) for g in groups]
         offsets = np.concatenate([[0], np.cumsum(sizes)])
         rows = [np.arange(offsets[i], offsets[i + 1]) for i in range(5)]
-        pts = np.array([p for g in groups for p in g], dtype=float).reshape(-1, PLANE.dim)
+        pts = np.array([p for g in groups for p in g], dtype=float).reshape(-1, bt.dim)
         link_pts, link_owners, links = compile_links(self.hinges, self.springs, self.prescribed,
-                                                     self.base_acceleration, len(pts), PLANE.dim)
+                                                     self.base_acceleration, len(pts), bt.dim)
         pts = np.concatenate([pts, link_pts])
         block_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        elasticity = np.array([elasticity_matrix(mats[b.material]) for b in self.blocks])
+        if bt is SOLID:
+            elasticity = np.array([elasticity_matrix_3d(mats[b.material].young, mats[b.material].poisson)
+                                   for b in self.blocks])
+            mesh = PolyhedronMesh.from_blocks([(b.vertices, b.faces) for b in self.blocks],
+                                              [b.name for b in self.blocks])
+        else:
+            elasticity = np.array([elasticity_matrix(mats[b.material]) for b in self.blocks])
+            mesh = None
+        velocity = np.zeros((len(self.blocks), bt.ndof))
+        velocity[:, : bt.rotation.stop] = [b.velocity for b in self.blocks]
         point_block = np.concatenate([np.array([o for g in owners for o in g], dtype=np.int64), link_owners])
         joint_names = list(self.joint_materials)
         joints = [self.default_joint, *self.joint_materials.values()]
@@ -424,7 +532,7 @@ class Model:
             block_ptr=block_ptr,
             density=np.array([mats[b.material].density for b in self.blocks]),
             elasticity=elasticity,
-            velocity=np.array([[*b.velocity, 0.0, 0.0, 0.0] for b in self.blocks]),
+            velocity=velocity,
             stress=np.array([b.stress for b in self.blocks], dtype=float),
             gravity=np.asarray(self.gravity, dtype=float),
             points=pts,
@@ -448,6 +556,7 @@ class Model:
                                        for j in joints]),
             joint_by_materials=by_mats,
             links=links,
+            mesh=mesh,
         )
 
 

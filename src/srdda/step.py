@@ -20,11 +20,12 @@ from typing import Literal
 
 import numpy as np
 
-from .assembly.blocks import block_terms
+from .assembly.blocks import GyroscopicTerm, block_terms
 from .assembly.system import BlockSystem
 from .constraints import point_terms
 from .contact.term import ContactModel, ContactParameters, ContactTerm
 from .integrators.methods import Method
+from .kinematics.blocktype import PLANE
 from .integrators.secant import SecantPass
 from .model import ModelArrays
 from .settings import RunSettings
@@ -73,6 +74,12 @@ class Stepper:
         self.method: Method = settings.resolved_method()
         self.solver = solver
         self.terms: list[Term] = [*block_terms(), *point_terms(arrays, settings.penalty)]
+        bt = arrays.block_type
+        if self.method.gyroscopic and bt.rotation.stop - bt.rotation.start > 1:  # rotations about several axes
+            self.terms.append(GyroscopicTerm(settings.secant_tolerance))
+        if settings.contacts and arrays.n_blocks > 1 and bt is not PLANE:
+            raise ValueError("contacts between 3D blocks are not available yet: set contacts = false "
+                             "(blocks then interact through points, springs and hinges only)")
         if settings.contacts and arrays.n_blocks > 1:
             w0 = model_half_height(arrays.vertices)
             model = ContactModel(arrays, contact_parameters(arrays, settings, w0))

@@ -38,6 +38,7 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components
 from .polygon import PolygonError, normalize_polygon
 
 __all__ = [
+    "polyhedron_covers",
     "PLANARITY_TOLERANCE",
     "PolyhedronError",
     "PolyhedronMesh",
@@ -548,3 +549,36 @@ def polyhedra_from_meshio(mesh: object, label: str = "mesh") -> list[Block3D]:
     blocks = [(points[order[point_ptr[k]:point_ptr[k + 1]]],
                [local[faces[m]] for m in face_order[face_ptr[k]:face_ptr[k + 1]]]) for k in range(n_surfaces)]
     return _normalize_blocks(blocks, [f"{label} surface {k}" for k in range(n_surfaces)])
+
+
+def polyhedron_covers(vertices: np.ndarray, faces: Sequence[np.ndarray], point: np.ndarray,
+                      tolerance: float = 1e-9) -> bool:
+    """True if ``point`` lies inside the closed polyhedron or on its surface (within ``tolerance`` × size).
+
+    Inside: the generalized winding number, the sum of the solid angles of the
+    fan triangles seen from the point over 4π (Van Oosterom & Strackee 1983),
+    is 1 (0 outside); exact for concave blocks. On the surface: the point lies
+    in the plane of a fan triangle and inside it.
+    """
+    tri = np.array([(f[0], f[i], f[i + 1]) for f in faces for i in range(1, len(f) - 1)])
+    size = float(np.linalg.norm(np.ptp(vertices, axis=0)))
+    eps = tolerance * size
+    a, b, c = (vertices[tri[:, k]] - point for k in range(3))
+    la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+    if min(la.min(), lb.min(), lc.min()) <= eps:
+        return True  # at a vertex
+    normal = np.cross(b - a, c - a)
+    area2 = np.linalg.norm(normal, axis=1)
+    height = np.abs(np.einsum("ij,ij->i", a, normal)) / area2  # distance to each triangle's plane
+    coplanar = height <= eps
+    if np.any(coplanar):  # barycentric test of the point in its coplanar triangles (edges included)
+        n = normal[coplanar]
+        w = np.stack([np.einsum("ij,ij->i", np.cross(u, v), n) for u, v in
+                      ((b[coplanar], c[coplanar]), (c[coplanar], a[coplanar]), (a[coplanar], b[coplanar]))], -1)
+        if np.any(np.all(w >= -eps * np.linalg.norm(n, axis=1)[:, None] * size, axis=1)):
+            return True
+    num = np.einsum("ij,ij->i", a, np.cross(b, c))
+    den = la * lb * lc + np.einsum("ij,ij->i", a, b) * lc + np.einsum("ij,ij->i", a, c) * lb \
+        + np.einsum("ij,ij->i", b, c) * la
+    winding = np.sum(2.0 * np.arctan2(num, den)) / (4.0 * np.pi)
+    return bool(winding > 0.5)

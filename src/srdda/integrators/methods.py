@@ -12,7 +12,9 @@ srdda      exact-rotation   paper (ρ∞)          secant          objective
 the configuration at t (Shi); ``secant`` iterates the step so that they use
 T_sec at the converged rotation increment (see :mod:`srdda.kinematics.update`).
 ``objective`` rotates stresses (and strain rates) with the block: Eq. 50 in
-the co-moving frame, written back in global components.
+the co-moving frame, written back in global components. In 3D srdda also
+takes the rate of change of a block's rotational inertia (the gyroscopic
+torque -ω × Jω, docs/theory-3d.md); dda0 and dda1 keep Shi's inertia.
 """
 from __future__ import annotations
 
@@ -32,6 +34,7 @@ class Method:
     scheme: TimeScheme
     linearization: str  # "start" | "secant"
     objective_stress: bool
+    gyroscopic: bool = False  # 3D: the torque -ω × Jω of a block's turning inertia (srdda.assembly.blocks)
 
     def __post_init__(self) -> None:
         if self.kinematics not in ("linear", "exact-rotation"):
@@ -50,7 +53,7 @@ def method_preset(name: str, rho_inf: float = 1.0, scheme: str | None = None,
     elif name == "dda1":
         m = Method("dda1", "exact-rotation", TimeScheme("shi"), "start", False)
     elif name == "srdda":
-        m = Method("srdda", "exact-rotation", TimeScheme("paper", rho_inf), "secant", True)
+        m = Method("srdda", "exact-rotation", TimeScheme("paper", rho_inf), "secant", True, gyroscopic=True)
     else:
         raise ValueError(f"method must be one of {METHODS}, got {name!r}")
     if scheme is not None:

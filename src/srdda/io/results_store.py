@@ -41,6 +41,7 @@ import h5py
 import numpy as np
 
 from ..constraints.data import links_from_flat, links_to_flat
+from ..geometry.polyhedron import PolyhedronMesh
 from ..model import Load, Model, ModelArrays
 from ..ledger import ENERGY_NAMES
 from ..results import Result, measured_points
@@ -138,6 +139,9 @@ def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None)
         value = getattr(arrays, f.name)
         if isinstance(value, np.ndarray):
             group.create_dataset(f.name, data=value)
+    if arrays.mesh is not None:  # the faces of 3D blocks
+        for f in dataclasses.fields(arrays.mesh):
+            group.create_dataset(f"mesh.{f.name}", data=getattr(arrays.mesh, f.name))
     links, links_meta = links_to_flat(arrays.links)  # hinges, springs, driven points (srdda.constraints)
     for name, value in links.items():
         group.create_dataset(f"links.{name}", data=value)
@@ -168,6 +172,9 @@ def model_arrays_from_file(path: str | Path) -> ModelArrays:
                                                       json.loads(g.attrs["links"]))
                 except ValueError as exc:
                     raise ResultsFileError(f"{path}: {exc}; pass the model to resume(..., model=...)") from None
+            elif f_.name == "mesh":
+                fields = {k[5:]: g[k][()] for k in g if k.startswith("mesh.")}
+                kwargs["mesh"] = PolyhedronMesh(**fields) if fields else None
             elif f_.name in g:
                 kwargs[f_.name] = g[f_.name][()]
             else:
@@ -366,6 +373,13 @@ class StoredResult:
     contacts: dict[str, np.ndarray]
     model_text: str | None
     versions: dict[str, str]
+
+    @property
+    def mesh(self) -> PolyhedronMesh | None:
+        """The faces of 3D blocks, read from the file (None for a 2D run)."""
+        with _open_read(self.path) as f:
+            fields = {k[5:]: f["model"][k][()] for k in f["model"] if k.startswith("mesh.")}
+        return PolyhedronMesh(**fields) if fields else None
 
     def array(self, name: str) -> np.ndarray:
         """A history as one array (first axis = recorded step); ``energy`` has columns ``energy_names``."""

@@ -18,9 +18,11 @@ from pathlib import Path
 import meshio
 import numpy as np
 
+from ..geometry.polyhedron import PolyhedronMesh
+from ..kinematics.blocktype import SOLID
 from .results_store import StoredResult, read_results
 
-__all__ = ["blocks_mesh", "contacts_mesh", "write_pvd", "write_vtu_series"]
+__all__ = ["blocks_mesh", "solid_blocks_mesh", "contacts_mesh", "write_pvd", "write_vtu_series"]
 
 
 def _xyz(xy: np.ndarray) -> np.ndarray:
@@ -57,6 +59,41 @@ def blocks_mesh(vertices: np.ndarray, block_ptr: np.ndarray, velocity: np.ndarra
         for name, values in per_block.items():
             cell_data[name].append(np.asarray(values)[blocks])
     return meshio.Mesh(_xyz(vertices), cells, cell_data=cell_data)
+
+
+def solid_blocks_mesh(vertices: np.ndarray, mesh: PolyhedronMesh, velocity: np.ndarray, stress: np.ndarray,
+                      material: np.ndarray, volume: np.ndarray, initial_volume: np.ndarray,
+                      fixed: np.ndarray | None = None) -> meshio.Mesh:
+    """All 3D blocks of one step as VTK polyhedron cells (their faces), grouped by vertex count as meshio needs.
+
+    Cell data: ``block``, ``material``, ``fixed``, ``velocity`` (vx, vy, vz),
+    ``angular_velocity`` (ωx, ωy, ωz), ``strain_rate`` and ``stress`` (xx, yy,
+    zz, yz, zx, xy), ``volume`` and ``volume_change`` (V/V0 - 1).
+    """
+    nb = mesh.n_blocks
+    counts = np.diff(mesh.block_ptr)
+    faces = np.split(mesh.face_vertex, mesh.face_ptr[1:-1])
+    per_block_faces = [[] for _ in range(nb)]
+    for block, face in zip(mesh.face_block, faces):
+        per_block_faces[block].append(face)
+    per_block = {
+        "block": np.arange(nb, dtype=np.int64),
+        "material": np.asarray(material, dtype=np.int64),
+        "fixed": np.zeros(nb, dtype=np.int64) if fixed is None else np.asarray(fixed, dtype=np.int64),
+        "velocity": velocity[:, SOLID.translation],
+        "angular_velocity": velocity[:, SOLID.rotation],
+        "strain_rate": velocity[:, SOLID.strain],
+        "stress": stress,
+        "volume": volume,
+        "volume_change": volume / initial_volume - 1.0,
+    }
+    cells, cell_data = [], {name: [] for name in per_block}
+    for n in np.unique(counts):
+        blocks = np.flatnonzero(counts == n)
+        cells.append((f"polyhedron{n}", [per_block_faces[b] for b in blocks]))
+        for name, values in per_block.items():
+            cell_data[name].append(np.asarray(values)[blocks])
+    return meshio.Mesh(np.asarray(vertices, dtype=float), cells, cell_data=cell_data)
 
 
 def contacts_mesh(contacts: Mapping[str, np.ndarray]) -> meshio.Mesh:
@@ -130,11 +167,17 @@ def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, 
             j = index.get(int(res.step[i]))
             return None if j is None else res.contacts_at(j)
     area0 = res.area[0]
+    solids = res.mesh
     block_files, contact_files, block_times, contact_times = [], [], [], []
     for i in sorted({*range(0, len(res.step), every), len(res.step) - 1}):
         name = f"{prefix}_{int(res.step[i]):07d}.vtu"
-        _write(blocks_mesh(res.vertices[i], res.block_ptr, res.velocity[i], res.stress[i], res.block_material,
-                           res.area[i], area0, res.block_fixed), out / name)
+        if solids is not None:
+            mesh = solid_blocks_mesh(res.vertices[i], solids, res.velocity[i], res.stress[i], res.block_material,
+                                     res.area[i], area0, res.block_fixed)
+        else:
+            mesh = blocks_mesh(res.vertices[i], res.block_ptr, res.velocity[i], res.stress[i], res.block_material,
+                               res.area[i], area0, res.block_fixed)
+        _write(mesh, out / name)
         block_files.append(name)
         block_times.append(res.time[i])
         c = contacts(i) if contacts is not None else None

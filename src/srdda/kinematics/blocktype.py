@@ -20,14 +20,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from .shape import NDOF, block_mass_matrix
+from .shape3d import block_mass_matrix_3d, compose_rotations, rotation_matrix_3d
 from .update import point_displacement, rotate_symmetric_components, secant_shape_function
+from .update3d import point_displacement_3d, rotate_symmetric_components_3d, secant_shape_function_3d
 
-__all__ = ["BlockType", "PLANE", "block_type_of_dimension"]
+__all__ = ["BlockType", "PlaneBlocks", "SolidBlocks", "PLANE", "SOLID", "block_type_of_dimension"]
 
 
 @dataclass(frozen=True)
 class BlockType:
-    """What a block of one dimension is made of (see the module doc)."""
+    """What a block of one dimension is made of (see the module doc); Shi's 2D block by default."""
 
     name: str
     dim: int  # coordinates of a point
@@ -72,10 +74,53 @@ class BlockType:
         return float(np.max(np.abs(increment - previous) * np.abs(increment))) if len(increment) else 0.0
 
 
-PLANE = BlockType("plane", dim=2, ndof=NDOF, n_strain=3, translation=slice(0, 2), rotation=slice(2, 3),
-                  strain=slice(3, 6))
+@dataclass(frozen=True)
+class PlaneBlocks(BlockType):
+    """2D blocks: (u0, v0, r0, εx, εy, γxy), paper Eq. 52; the rotation is an angle."""
 
-_BY_DIMENSION = {2: PLANE}
+
+@dataclass(frozen=True)
+class SolidBlocks(BlockType):
+    """3D blocks: (u0, v0, w0, rx, ry, rz, εx, εy, εz, γyz, γzx, γxy), paper Eq. A1-A2.
+
+    The rotation increment is a rotation vector; the accumulated rotation is a
+    matrix composed by products (Rodrigues), never a sum of vectors.
+    """
+
+    def shape(self, lever: np.ndarray, rotation_increment: np.ndarray | None = None) -> np.ndarray:
+        return secant_shape_function_3d(lever, rotation_increment)
+
+    def mass_matrix(self, volume: np.ndarray, second: np.ndarray) -> np.ndarray:
+        return block_mass_matrix_3d(volume, second)
+
+    def rotation_increment(self, dd: np.ndarray) -> np.ndarray:
+        return dd[:, self.rotation]
+
+    def point_displacement(self, lever: np.ndarray, dd: np.ndarray, kinematics: str) -> np.ndarray:
+        return point_displacement_3d(lever, dd, kinematics)
+
+    def initial_rotation(self, n_blocks: int) -> np.ndarray:
+        return np.tile(np.eye(self.dim), (n_blocks, 1, 1))
+
+    def compose_rotation(self, rotation: np.ndarray, dd: np.ndarray) -> np.ndarray:
+        return compose_rotations(rotation, rotation_matrix_3d(self.rotation_increment(dd)))
+
+    def rotate_symmetric(self, components: np.ndarray, dd: np.ndarray, shear_factor: float) -> np.ndarray:
+        return rotate_symmetric_components_3d(components, rotation_matrix_3d(self.rotation_increment(dd)),
+                                              shear_factor)
+
+    def secant_mismatch(self, increment: np.ndarray, previous: np.ndarray) -> float:
+        if not len(increment):
+            return 0.0
+        return float(np.max(np.linalg.norm(increment - previous, axis=1) * np.linalg.norm(increment, axis=1)))
+
+
+PLANE = PlaneBlocks("plane", dim=2, ndof=NDOF, n_strain=3, translation=slice(0, 2), rotation=slice(2, 3),
+                    strain=slice(3, 6))
+SOLID = SolidBlocks("solid", dim=3, ndof=12, n_strain=6, translation=slice(0, 3), rotation=slice(3, 6),
+                    strain=slice(6, 12))
+
+_BY_DIMENSION = {2: PLANE, 3: SOLID}
 
 
 def block_type_of_dimension(dim: int) -> BlockType:

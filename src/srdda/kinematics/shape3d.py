@@ -39,9 +39,14 @@ NDOF_3D = 12  # generalized unknowns per 3D block (Eq. A2)
 
 def skew(vectors: np.ndarray) -> np.ndarray:
     """Cross-product matrices [w]× of vectors (n, 3), so that [w]× r = w × r; (n, 3, 3)."""
-    x, y, z = vectors[:, 0], vectors[:, 1], vectors[:, 2]
-    zero = np.zeros_like(x)
-    return np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
+    K = np.zeros((len(vectors), 3, 3))
+    K[:, _SKEW_ROW, _SKEW_COL] = vectors[:, _SKEW_COMPONENT] * _SKEW_SIGN
+    return K
+
+
+# [w]× = [[0, -z, y], [z, 0, -x], [-y, x, 0]]: (row, column, component of w, sign)
+_SKEW_ROW, _SKEW_COL = np.array([0, 0, 1, 1, 2, 2]), np.array([1, 2, 0, 2, 0, 1])
+_SKEW_COMPONENT, _SKEW_SIGN = np.array([2, 1, 2, 0, 1, 0]), np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
 
 
 def _linear_columns() -> np.ndarray:
