@@ -18,9 +18,10 @@ from pydantic import ValidationError
 
 from ..history import HistoryError, MotionHistory
 from ..geometry.polygon import PolygonError
+from ..geometry.polyhedron import PolyhedronError, box
 from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..settings import RunSettings
-from .schema import HistorySection, ModelFile
+from .schema import BlockSection, HistorySection, ModelFile
 
 __all__ = ["ModelFileError", "load_model", "model_from_dict", "save_model", "model_to_dict", "format_validation"]
 
@@ -92,9 +93,8 @@ def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
         if b.material not in spec.materials:
             raise ModelFileError(f"{source}: blocks[{i}].material: unknown material {b.material!r}")
         try:
-            joints = None if b.edge_joints is None else [j or None for j in b.edge_joints]
-            model.add_block(b.vertices, b.material, b.velocity, b.angular_velocity, b.stress, label, b.fixed, joints)
-        except (ModelError, PolygonError) as exc:
+            _add_block(model, b, label)
+        except (ModelError, PolygonError, PolyhedronError) as exc:
             raise ModelFileError(f"{source}: blocks[{i}]: {exc}") from None
         if b.name is not None:
             if b.name in names:
@@ -122,6 +122,29 @@ def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
     except ModelError as exc:
         raise ModelFileError(f"{source}: {exc}") from None
     return model, spec.run
+
+
+def _add_block(model: Model, b: BlockSection, label: str) -> None:
+    """A polygon (``vertices``) or a polyhedron (``vertices`` + ``faces``, or ``box``)."""
+    solid = b.faces is not None or b.box is not None
+    if (b.vertices is None) == (b.box is None) or (b.box is not None and b.faces is not None):
+        raise ModelError("give 'vertices' (with 'faces' for a polyhedron) or 'box', exactly one")
+    if not solid:
+        if b.edge_joints is not None and len(b.edge_joints) == 0:
+            raise ModelError("edge_joints is empty")
+        joints = None if b.edge_joints is None else [j or None for j in b.edge_joints]
+        stress = b.stress
+        if isinstance(b.angular_velocity, tuple) or len(stress) != 3:
+            raise ModelError("a polygon has a scalar angular_velocity and stress [sx, sy, txy]")
+        model.add_block(b.vertices, b.material, b.velocity or (0.0, 0.0), b.angular_velocity, stress, label,
+                        b.fixed, joints)
+        return
+    if b.edge_joints is not None:
+        raise ModelError("edge_joints are for polygons (2D)")
+    vertices, faces = box(*b.box, label) if b.box is not None else (b.vertices, b.faces)
+    omega = b.angular_velocity if isinstance(b.angular_velocity, tuple) else (0.0, 0.0, b.angular_velocity)
+    stress = b.stress if len(b.stress) == 6 else (b.stress[0], b.stress[1], 0.0, 0.0, 0.0, b.stress[2])
+    model.add_polyhedron(vertices, faces, b.material, b.velocity or (0.0, 0.0, 0.0), omega, stress, label, b.fixed)
 
 
 def _history(h: HistorySection, where: str) -> MotionHistory:
@@ -210,7 +233,7 @@ def load_model(path: str | Path) -> tuple[Model, RunSettings]:
 
 
 def _pt(p: np.ndarray) -> list[float]:
-    return [float(p[0]), float(p[1])]
+    return [float(c) for c in p]
 
 
 def _run_dict(settings: RunSettings) -> dict[str, Any]:
@@ -237,9 +260,12 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
     for b in model.blocks:
         entry: dict[str, Any] = {"name": b.name, "material": mats[b.material],
                                  "vertices": [_pt(v) for v in b.vertices]}
+        if b.faces is not None:
+            entry["faces"] = [[int(i) for i in f] for f in b.faces]
+        dim = len(b.vertices[0])
         if any(b.velocity):
-            entry["velocity"] = [b.velocity[0], b.velocity[1]]
-            entry["angular_velocity"] = b.velocity[2]
+            entry["velocity"] = list(b.velocity[:dim])
+            entry["angular_velocity"] = list(b.velocity[dim:]) if b.faces is not None else b.velocity[dim]
         if any(b.stress):
             entry["stress"] = list(b.stress)
         if b.fixed:

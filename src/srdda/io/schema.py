@@ -27,7 +27,7 @@ Stiffness = Annotated[float, _unit("stiffness")]
 Density = Annotated[float, _unit("density")]
 Time = Annotated[float, _unit("time")]
 Angle = Annotated[float, _unit("angle")]
-Point = tuple[float, float]
+Point = tuple[float, float] | tuple[float, float, float]  # [x, y] in 2D, [x, y, z] in 3D
 
 
 def _strictly_increasing(rows: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
@@ -58,12 +58,17 @@ class JointMaterialSection(_Strict):
 
 
 class BlockSection(_Strict):
+    """A polygon (``vertices``), or a polyhedron (``vertices`` with ``faces``, or ``box``)."""
+
     name: str | None = None
     material: str
-    vertices: list[Point] = Field(min_length=3)
-    velocity: Point = (0.0, 0.0)
-    angular_velocity: float = 0.0
-    stress: tuple[Pressure, Pressure, Pressure] = (0.0, 0.0, 0.0)
+    vertices: list[Point] | None = Field(None, min_length=3)
+    faces: list[list[int]] | None = None  # 3D: vertex indices of each face (any orientation)
+    box: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None  # 3D: [lo, hi] corners
+    velocity: Point | None = None  # default zero
+    angular_velocity: float | tuple[float, float, float] = 0.0  # rad/s: ω in 2D, [ωx, ωy, ωz] in 3D
+    stress: tuple[Pressure, Pressure, Pressure] | tuple[Pressure, Pressure, Pressure, Pressure, Pressure, Pressure] \
+        = (0.0, 0.0, 0.0)  # (σx, σy, τxy) in 2D, (σx, σy, σz, τyz, τzx, τxy) in 3D
     fixed: bool = False
     edge_joints: list[str] | None = None  # joint material per edge; "" = chosen by block materials
 
