@@ -293,8 +293,8 @@ def hinge_gap_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 # ---------------------------------------------------------------------------------------------
 # uniaxial-2d: a free 1 x 0.5 m block (no gravity), E = 1e10 Pa, ν = 0.25, pulled by 250 N at each
 # vertex of its two short edges (σ = 500 N / 0.5 m = 1 kPa), 300 steps of 1 ms with srdda at
-# ρ∞ = 0, which damps the block's elastic vibration (ωΔt ≈ 10) within a few steps. Strains are read
-# from the vertices (mean edge positions), not from the engine's strain unknowns.
+# ρ∞ = 0, which damps the block's elastic vibration (ωΔt ≈ 7 and 14) within a few steps. Strains are
+# read from the vertices (mean edge positions), not from the engine's strain unknowns.
 UNIAXIAL_E, UNIAXIAL_NU, UNIAXIAL_LX, UNIAXIAL_LY, UNIAXIAL_STRESS = 1e10, 0.25, 1.0, 0.5, 1e3
 # Strain 1e-7: the geometric non-linearity (stress on the current edge, logarithmic vs engineering
 # strain) is ~ε = 1e-7 relative, round-off of 1 m coordinates 1e-16 / 1e-7 m = 1e-9 relative.
