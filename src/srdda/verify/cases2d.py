@@ -5,6 +5,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..assembly.blocks import mass_matrices
+from ..kinematics.blocktype import PLANE
 from ..model import JointMaterial, Material, Model
 from ..paper import get_example
 from ..paper.nunchaku import build as build_nunchaku, hinge_distance
@@ -14,6 +15,8 @@ from ..simulation import run
 from .registry import Row, case, row
 
 __all__: list[str] = []
+
+OMEGA = PLANE.rotation.start  # the angular velocity's column among a 2D block's generalized velocities
 
 
 def _completed(result: Result, what: str) -> Result:
@@ -53,7 +56,7 @@ def free_spin_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
         m.add_material("rock", Material(density=2500.0, young=2e16, poisson=0.25))
         m.add_block([[-0.5, -0.25], [0.5, -0.25], [0.5, 0.25], [-0.5, 0.25]], "rock", angular_velocity=SPIN_OMEGA)
         res = _completed(run(m, RunSettings(dt=SPIN_DT, n_steps=n, method=method)), f"free-spin-2d {method}")
-        omega = res.array("velocity")[:, 0, 2]
+        omega = res.array("velocity")[:, 0, OMEGA]
         area = res.array("area")[:, 0]
         rows.append(row("free-spin-2d", "omega (rad/s), worst step", method, _farthest(omega, SPIN_OMEGA),
                         SPIN_OMEGA, SPIN_KEPT))
@@ -177,7 +180,7 @@ SWING_DDA0_DDA1 = 2e-3
 
 def _half_period(time: np.ndarray, omega: np.ndarray) -> float:
     """First time after release at which ω changes sign back (the far turning point), interpolated."""
-    i = int(np.nonzero((omega[1:-1] < 0) & (omega[2:] >= 0))[0][0]) + 1
+    i = int(np.nonzero((omega[:-1] < 0) & (omega[1:] >= 0))[0][0])
     return float(time[i] - omega[i] * (time[i + 1] - time[i]) / (omega[i + 1] - omega[i]))
 
 
@@ -204,7 +207,7 @@ def pendulum_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
         for method in methods:
             model, settings = get_example(name).build(method)
             res = _completed(run(model, settings), f"pendulum-2d {name} {method}")
-            omega = res.array("velocity")[:, block, 2]
+            omega = res.array("velocity")[:, block, OMEGA]
             tolerance = SWING_SRDDA if method == "srdda" else SWING_DDA0_DDA1
             rows.append(row("pendulum-2d", f"{name}: ω at the bottom (rad/s)", method, omega.min(), omega_bottom,
                             tolerance))
@@ -315,9 +318,10 @@ def _uniaxial_strains(plane: str) -> tuple[float, float, float]:
             m.add_point_load([x, y], [sign * half, 0.0], block=0)
     res = _completed(run(m, RunSettings(dt=1e-3, n_steps=300, method="srdda", rho_inf=0.0), keep_history=False),
                      f"uniaxial-2d {plane}")
-    v = res.final_state.vertices  # counter-clockwise from (0, 0)
-    axial = (0.5 * (v[1, 0] + v[2, 0]) - 0.5 * (v[0, 0] + v[3, 0])) / lx - 1.0
-    lateral = (0.5 * (v[2, 1] + v[3, 1]) - 0.5 * (v[0, 1] + v[1, 1])) / ly - 1.0
+    v = res.final_state.vertices
+    right, top = v[:, 0] > lx / 2, v[:, 1] > ly / 2
+    axial = (v[right, 0].mean() - v[~right, 0].mean()) / lx - 1.0
+    lateral = (v[top, 1].mean() - v[~top, 1].mean()) / ly - 1.0
     drift = float(np.linalg.norm(res.array("centroid")[-1, 0] - res.array("centroid")[0, 0]))
     return float(axial), float(lateral), drift
 

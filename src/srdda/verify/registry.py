@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 from ..integrators.methods import METHODS
 
@@ -52,11 +52,13 @@ class UnknownCaseError(KeyError):
         return str(self.args[0])
 
 
-def case(name: str, dim: Literal[2, 3], description: str, methods: Sequence[str] = METHODS,
+def case(name: str, dim: int, description: str, methods: Sequence[str] = METHODS,
          quick: bool = False) -> Callable[[CaseFunction], CaseFunction]:
     """Register the decorated function as the verification case ``name``."""
     if name in CASES:
         raise ValueError(f"verification case {name!r} is registered twice")
+    if dim not in (2, 3):
+        raise ValueError(f"verification case {name!r}: dim must be 2 or 3, got {dim}")
     unknown = set(methods) - set(METHODS)
     if unknown:
         raise ValueError(f"verification case {name!r}: unknown methods {sorted(unknown)}")
