@@ -171,7 +171,7 @@ SWINGS = {  # example: (pivot-to-centroid d (m), k² (m²), the swinging block)
 # and its scheme at ρ∞ = 1 is second order: (ωΔt)²/12 = 2.5e-7 at ω = 1.73 rad/s, Δt = 1 ms;
 # the pin spring (2e16 N/m) stretches by 1e-12 m. Measured 1e-7 to 4e-7.
 SWING_SRDDA = 2e-6
-# dda0's blocks grow (area × (1 + (ωΔt)²) per step: the rod is 0.07% longer by its first bottom)
+# dda0's blocks grow (area × (1 + (ωΔt)²) per step: the rod's area is up 0.07% at step 1000, Table 3)
 # and dda1's post-adjusted rotation is not the one its scheme integrated: both overshoot ω and
 # lengthen the swing. dda1's ω at the bottom is the paper's Tables 2 and 4 value (+9.3e-4 and
 # +9.5e-4 relative, ours equal to the paper's to 5e-5). Measured up to 9.5e-4.
