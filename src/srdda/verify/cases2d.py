@@ -35,8 +35,9 @@ def _farthest(values: np.ndarray, reference: float) -> float:
 # free-spin-2d: a 1 x 0.5 m block spinning at ω0 = 1 rad/s in free flight, E = 2e16 Pa (rigid),
 # Δt = 1 ms, 10,000 steps (2,000 with --quick: round-off only grows with the step count).
 SPIN_OMEGA, SPIN_DT = 1.0, 1e-3
-# ω and area under exact rotations (srdda, dda1): no force acts, so ω is constant and the
-# rotation is exact: what is left is round-off of 1e4 updates (measured 5e-14 for ω, 6e-15 for the area).
+# ω (all three methods) and area under exact rotations (srdda, dda1): no force acts, so ω is constant,
+# and srdda's and dda1's rotations are exact: what is left is round-off of 1e4 updates (measured
+# 5e-14 for ω, 6e-15 for the area).
 SPIN_KEPT = 1e-10
 # The accumulated angle is a sum of 1e4 equal increments ωΔt: round-off ~1e4 × 1e-16 (measured 1e-14).
 SPIN_ANGLE = 1e-12
@@ -169,7 +170,8 @@ SWINGS = {  # example: (pivot-to-centroid d (m), k² (m²), the swinging block)
 # ω at the bottom vs the energy balance ω² = 2 g d / (d² + k²), and the half period (the time ω
 # first returns to zero, interpolated) vs solve_ivp of the ODE (rtol 1e-11). srdda rotates exactly
 # and its scheme at ρ∞ = 1 is second order: (ωΔt)²/12 = 2.5e-7 at ω = 1.73 rad/s, Δt = 1 ms;
-# the pin spring (2e16 N/m) stretches by 1e-12 m. Measured 1e-7 to 4e-7.
+# the pin spring (2e16 N/m) stretches by 1e-12 m; ω's extreme read at the recorded steps misses the
+# true one by at most |ω''|Δt²/8 ~ 1e-8 relative. Measured 1e-7 to 4e-7.
 SWING_SRDDA = 2e-6
 # dda0's blocks grow (area × (1 + (ωΔt)²) per step: the rod's area is up 0.07% at step 1000, Table 3)
 # and dda1's post-adjusted rotation is not the one its scheme integrated: both overshoot ω and
