@@ -195,6 +195,48 @@ def paper_command(example: str, method: str, as_json: bool, report_dir: str | No
         click.echo(json.dumps(documents[0] if len(documents) == 1 else documents, indent=1))
 
 
+@main.command("verify")
+@click.argument("cases", nargs=-1)
+@click.option("--json", "as_json", is_flag=True, help='Print {"rows": [...]} instead of the table.')
+@click.option("--quick", is_flag=True, help="Shorter runs of the cases whose tolerances hold for them.")
+def verify_command(cases: tuple[str, ...], as_json: bool, quick: bool) -> None:
+    """Run the verification cases (all, or CASES) against their references (docs/verification.md).
+
+    Exit code 1 if any row exceeds its tolerance.
+    """
+    import time
+
+    from .verify import CASES, UnknownCaseError, get_case, run_case
+
+    try:
+        names = [get_case(name).name for name in cases] or list(CASES)
+    except UnknownCaseError as exc:
+        raise click.UsageError(str(exc)) from None
+    rows: list[dict] = []
+    for name in names:
+        start = time.perf_counter()
+        try:
+            rows += run_case(name, quick)
+        except RuntimeError as exc:
+            raise click.ClickException(f"verification case {name}: {exc}") from None
+        if not as_json:
+            click.echo(f"{name}: {time.perf_counter() - start:.1f} s", err=True)
+    if as_json:
+        click.echo(json.dumps({"rows": rows}, indent=1))
+    else:
+        header = ("case", "quantity", "method", "ours", "reference", "error", "tolerance", "result")
+        lines = [header] + [
+            (r["case"], r["quantity"], r["method"], f"{r['ours']:.10g}", f"{r['reference']:.10g}",
+             f"{r['rel_error']:.2e} {'rel' if r['measure'] == 'relative' else 'abs'}",
+             "-" if r["tolerance"] is None else f"{r['tolerance']:.0e}",
+             {True: "PASS", False: "FAIL", None: "info"}[r["passed"]]) for r in rows]
+        widths = [max(len(line[i]) for line in lines) for i in range(len(header))]
+        for line in lines:
+            click.echo("  ".join(cell.ljust(w) for cell, w in zip(line, widths)).rstrip())
+    if any(r["passed"] is False for r in rows):
+        sys.exit(1)
+
+
 main.add_command(plot_command)
 main.add_command(animate_command)
 main.add_command(vtk_command)

@@ -1,0 +1,97 @@
+"""The registry of verification cases and the rows they report.
+
+A case runs models and compares what they give with an independent reference
+(a closed form, or an ODE of the same body solved by scipy). It is one
+decorated function::
+
+    @case("free-spin-2d", dim=2, methods=("dda0", "dda1", "srdda"),
+          description="a block spinning in free flight keeps ω and its area")
+    def free_spin_2d(methods, quick):
+        ...
+        return [row("free-spin-2d", "omega", "srdda", ours, 1.0, tolerance=1e-10), ...]
+
+The function receives the methods to run (those of the case, or fewer) and
+``quick`` (True: a shorter run whose tolerances still hold; only for cases
+registered with ``quick=True``, the others get False). Each tolerance is
+defined beside its case with a comment saying what it measures.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from ..integrators.methods import METHODS
+
+__all__ = ["Case", "CASES", "Row", "case", "row", "run_case", "UnknownCaseError"]
+
+Row = dict[str, Any]
+CaseFunction = Callable[[tuple[str, ...], bool], list[Row]]
+
+
+@dataclass(frozen=True)
+class Case:
+    """One verification case: its name on the command line, its dimension, what it checks, how."""
+
+    name: str
+    dim: int
+    description: str  # one line
+    methods: tuple[str, ...]  # the methods the case is meaningful for
+    run: CaseFunction
+    quick: bool  # True: ``--quick`` runs it shorter with the same tolerances
+
+
+CASES: dict[str, Case] = {}
+
+
+class UnknownCaseError(KeyError):
+    """A case name that is not registered (the message lists the registered ones)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+def case(name: str, dim: int, description: str, methods: Sequence[str] = METHODS,
+         quick: bool = False) -> Callable[[CaseFunction], CaseFunction]:
+    """Register the decorated function as the verification case ``name``."""
+    if name in CASES:
+        raise ValueError(f"verification case {name!r} is registered twice")
+    if dim not in (2, 3):
+        raise ValueError(f"verification case {name!r}: dim must be 2 or 3, got {dim}")
+    unknown = set(methods) - set(METHODS)
+    if unknown:
+        raise ValueError(f"verification case {name!r}: unknown methods {sorted(unknown)}")
+
+    def register(function: CaseFunction) -> CaseFunction:
+        CASES[name] = Case(name, dim, description, tuple(methods), function, quick)
+        return function
+
+    return register
+
+
+def get_case(name: str) -> Case:
+    if name not in CASES:
+        raise UnknownCaseError(f"unknown verification case {name!r}; the cases are: {', '.join(CASES)}")
+    return CASES[name]
+
+
+def row(case_name: str, quantity: str, method: str, ours: float, reference: float,
+        tolerance: float | None) -> Row:
+    """A compared quantity: relative error |ours - reference| / |reference|, absolute where the reference is 0.
+
+    ``tolerance`` None makes an information row (reported, never failed): ``passed`` is None.
+    """
+    ours, reference = float(ours), float(reference)
+    measure = "absolute" if reference == 0.0 else "relative"
+    error = abs(ours - reference) if measure == "absolute" else abs(ours - reference) / abs(reference)
+    passed = None if tolerance is None else bool(math.isfinite(error) and error <= tolerance)
+    return {"case": case_name, "quantity": quantity, "method": method, "ours": ours, "reference": reference,
+            "rel_error": error, "measure": measure, "tolerance": tolerance, "passed": passed}
+
+
+def run_case(name: str, quick: bool = False, methods: Sequence[str] | None = None) -> list[Row]:
+    """Run the case ``name`` (all its methods, or ``methods``) and return its rows."""
+    c = get_case(name)
+    chosen = c.methods if methods is None else tuple(m for m in c.methods if m in methods)
+    return c.run(chosen, quick and c.quick)

@@ -1,0 +1,69 @@
+"""`srdda verify`: the command, its JSON document, its exit codes, and the manual documenting every case.
+
+The cases' physics is what the cases check (each row against its tolerance); the runs that
+other tests already make (free spin, free fall, incline, nunchaku, the paper's swings) are not
+repeated here: the command is run on the cases that no other test covers.
+"""
+import json
+import re
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from srdda.cli import main
+from srdda.verify import CASES, Case, row, run_case
+
+REQUIRED = {"case", "quantity", "method", "ours", "reference", "rel_error"}
+MANUAL = Path(__file__).resolve().parents[1] / "docs" / "verification.md"
+
+
+def test_verify_json_of_the_fast_cases_passes():
+    res = CliRunner().invoke(main, ["verify", "uniaxial-2d", "spring-mass-2d", "--quick", "--json"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    assert set(doc) == {"rows"}
+    assert {r["case"] for r in doc["rows"]} == {"uniaxial-2d", "spring-mass-2d"}
+    for r in doc["rows"]:
+        assert REQUIRED <= set(r), r
+        assert r["passed"] is not False, r
+    # every method the spring case is meaningful for has its period row
+    periods = {r["method"] for r in doc["rows"] if r["quantity"] == "period (s)"}
+    assert set(CASES["spring-mass-2d"].methods) <= periods
+
+
+def test_quick_shortens_only_cases_registered_for_it():
+    rows = run_case("free-spin-2d", quick=True, methods=("dda1",))
+    assert {r["method"] for r in rows} == {"dda1"}
+    assert any("step 2000" in r["quantity"] for r in rows) and all(r["passed"] for r in rows)
+    assert not CASES["pendulum-2d"].quick  # its half period needs the whole swing
+
+
+def test_a_failed_row_exits_with_1(monkeypatch):
+    def off_by_one_percent(methods, quick):
+        return [row("always-off", "x", "srdda", 1.01, 1.0, tolerance=1e-3)]
+    monkeypatch.setitem(CASES, "always-off", Case("always-off", 2, "test", ("srdda",), off_by_one_percent, False))
+    res = CliRunner().invoke(main, ["verify", "always-off"])
+    assert res.exit_code == 1
+    assert "FAIL" in res.stdout
+
+
+def test_unknown_case_is_one_clear_error_listing_the_cases():
+    res = CliRunner().invoke(main, ["verify", "free-spin-2d", "no-such-case"])
+    assert res.exit_code == 2
+    assert "unknown verification case 'no-such-case'" in res.output
+    assert all(name in res.output for name in CASES)
+    assert "Traceback" not in res.output
+
+
+def test_row_error_is_absolute_where_the_reference_is_zero():
+    r = row("c", "gap", "srdda", 2e-10, 0.0, tolerance=1e-9)
+    assert (r["measure"], r["rel_error"], r["passed"]) == ("absolute", 2e-10, True)
+    r = row("c", "period", "srdda", 1.5, -2.0, tolerance=0.2)
+    assert (r["measure"], r["rel_error"], r["passed"]) == ("relative", 1.75, False)
+    assert row("c", "info", "srdda", 1.0, 2.0, tolerance=None)["passed"] is None
+
+
+def test_every_case_is_documented_in_the_manual():
+    text = MANUAL.read_text(encoding="utf-8")
+    headings = set(re.findall(r"^## `([\w-]+)`", text, flags=re.MULTILINE))
+    assert set(CASES) <= headings, set(CASES) - headings
