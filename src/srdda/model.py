@@ -399,22 +399,25 @@ class Model:
         self.springs.append(SpringSpec(a, pa, b, pb, float(stiffness), rest_length, float(damping), kind))
 
     def add_prescribed_motion(self, point: Sequence[float], history: object, quantity: str = "displacement",
-                              components: str = "xy", by: str = "multiplier", stiffness: float | None = None,
+                              components: str | None = None, by: str = "multiplier", stiffness: float | None = None,
                               block: int | None = None) -> None:
         """Drive a block point: ``history`` of displacement (m, from its start), velocity (m/s) or
         acceleration (m/s², starting from rest: a shaking table or an earthquake record at a support).
 
-        ``history``: [x, y] constant, [[t, x, y], ...] table, ``MotionHistory.sine(...)`` or a callable
-        of t; ``components`` "x", "y" or "xy"; ``by`` "multiplier" (exact) or "penalty" (``stiffness``
-        N/m, default the run's penalty).
+        ``history``: [x, y(, z)] constant, [[t, x, y(, z)], ...] table, ``MotionHistory.sine(...)`` or a
+        callable of t; ``components`` the axes driven, e.g. "x", "xy" (default: every axis: "xy" in 2D,
+        "xyz" in 3D); ``by`` "multiplier" (exact) or "penalty" (``stiffness`` N/m, default the run's penalty).
         """
         b, p = self._resolve(point, block, "prescribed point")
         if self.blocks[b].fixed:
             raise ModelError(f"prescribed point: block {self.blocks[b].name!r} is fixed")
         if quantity not in ("displacement", "velocity", "acceleration"):
             raise ModelError(f"prescribed quantity must be 'displacement', 'velocity' or 'acceleration', got {quantity!r}")
-        if components not in ("x", "y", "xy"):
-            raise ModelError(f"prescribed components must be 'x', 'y' or 'xy', got {components!r}")
+        axes = "xyz"[: self.dim]
+        components = axes if components is None else components
+        if not components or any(c not in axes for c in components) or len(set(components)) != len(components):
+            raise ModelError(f"prescribed components are some of {axes!r} in this {self.dim}D model, got "
+                             f"{components!r}")
         if by not in ("multiplier", "penalty"):
             raise ModelError(f"prescribed 'by' must be 'multiplier' or 'penalty', got {by!r}")
         if stiffness is not None and not stiffness > 0:
@@ -423,7 +426,7 @@ class Model:
             hist = MotionHistory.of(history)
         except HistoryError as exc:
             raise ModelError(f"prescribed point history: {exc}") from exc
-        self.prescribed.append(PrescribedSpec(b, p, hist, quantity, ("x" in components, "y" in components), by,
+        self.prescribed.append(PrescribedSpec(b, p, hist, quantity, tuple(c in components for c in axes), by,
                                               None if stiffness is None else float(stiffness)))
 
     def set_base_acceleration(self, history: object) -> None:

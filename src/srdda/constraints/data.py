@@ -69,7 +69,7 @@ class PrescribedSpec:
     point: np.ndarray
     history: MotionHistory
     quantity: str = "displacement"
-    components: tuple[bool, bool] = (True, True)
+    components: tuple[bool, ...] = (True, True)  # which axes are driven
     by: str = "multiplier"
     stiffness: float | None = None
 

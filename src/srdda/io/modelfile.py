@@ -210,7 +210,7 @@ def _links_dict(model: Model) -> dict[str, Any]:
         out["prescribed_motion"] = [
             {"at": _pt(p.point), "block": p.block, "history": _history_dict(p.history, f"prescribed motion at "
                                                                                      f"{_pt(p.point)}"),
-             "quantity": p.quantity, "components": "x" * p.components[0] + "y" * p.components[1], "by": p.by,
+             "quantity": p.quantity, "components": "".join(a for a, on in zip("xyz", p.components) if on), "by": p.by,
              **({} if p.stiffness is None else {"stiffness": p.stiffness})}
             for p in model.prescribed]
     if model.base_acceleration is not None:

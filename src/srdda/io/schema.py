@@ -140,7 +140,7 @@ class PrescribedMotionSection(PointRef):
 
     history: HistorySection
     quantity: Literal["displacement", "velocity", "acceleration"] = "displacement"
-    components: Literal["x", "y", "xy"] = "xy"
+    components: Literal["x", "y", "z", "xy", "xz", "yz", "xyz"] | None = None  # default: every axis
     by: Literal["multiplier", "penalty"] = "multiplier"
     stiffness: Stiffness | None = Field(None, gt=0)
 
