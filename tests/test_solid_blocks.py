@@ -138,3 +138,31 @@ def test_3d_model_file_runs_and_round_trips(tmp_path):
     save_model(model, settings, tmp_path / "again.toml")
     again = srdda.run(*load_model(tmp_path / "again.toml"))
     np.testing.assert_array_equal(again.array("measured_position"), first.array("measured_position"))
+
+
+def test_3d_figure_and_animation(tmp_path):
+    from PIL import Image
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    from srdda import plotting
+    from srdda.animation import animate
+    from srdda.io.results_store import ResultsStore, read_results
+
+    m = srdda.Model(gravity=(0.0, 0.0, -9.81))
+    m.add_material("rock", srdda.Material(2600.0, 1e10, 0.25))
+    m.add_polyhedron(*box((0, 0, 0), (1, 0.2, 0.2)), "rock")
+    m.add_polyhedron(*box((1, 0, 0), (2, 0.2, 0.2)), "rock")
+    m.add_pin((0.0, 0.1, 0.1), block=0)
+    m.add_hinge((1.0, 0.1, 0.1), block_a=0, block_b=1)
+    m.add_measured_point((2.0, 0.1, 0.1), block=1)
+    settings = srdda.RunSettings(dt=1e-3, n_steps=30, contacts=False)
+    srdda.run(m, settings, recorders=[ResultsStore(tmp_path / "r.h5", settings)])
+    stored = read_results(tmp_path / "r.h5")
+    fig = plotting.fig_model(stored)
+    fig.canvas.draw()  # a 3D collection projects its faces when drawn
+    faces = [c for c in fig.axes[0].collections if isinstance(c, Poly3DCollection)]
+    assert len(faces) == 1 and len(faces[0].get_paths()) == 12  # two boxes, six faces each
+    assert fig.axes[0].name == "3d" and len(fig.axes[0].lines) == 1  # the measured point's path
+    out = animate(stored, tmp_path / "a.gif", max_frames=5)
+    with Image.open(out) as gif:
+        assert gif.n_frames == 5

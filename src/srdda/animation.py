@@ -19,7 +19,8 @@ import numpy as np  # noqa: E402
 from matplotlib import animation  # noqa: E402
 
 from .io.results_store import StoredResult, read_results  # noqa: E402
-from .plotting import block_values, method_label, history, plot_blocks  # noqa: E402
+from .plotting import (solid_limits, block_values, history, method_label, plot_blocks,  # noqa: E402
+                       plot_solid_blocks, solid_faces)
 
 __all__ = ["animate", "ffmpeg_path"]
 
@@ -74,6 +75,9 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
     mp = history(res, "measured_position")
     steps, times = history(res, "step"), history(res, "time")
     frames = _frames(len(steps), max_frames)
+    if res.mesh is not None:
+        _write_solid_animation(res, out, writer, frames, color, dpi)
+        return
     fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
     values = block_values(res, 0, color)
     coll = plot_blocks(ax, verts[0], res.block_ptr, values)
@@ -95,6 +99,39 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
             coll.set_array(block_values(res, i, color))
         for k, line in enumerate(trails):
             line.set_data(mp[: i + 1, k, 0], mp[: i + 1, k, 1])
+        ax.set_title(f"{method_label(res.method)}: step {int(steps[i])}, t = {float(times[i]):.4g} s")
+        return [coll, *trails]
+
+    anim = animation.FuncAnimation(fig, draw, frames=[int(i) for i in frames], blit=False)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    anim.save(out, writer=writer, dpi=dpi)
+    plt.close(fig)
+
+
+def _write_solid_animation(res: StoredResult, out: Path, writer: animation.AbstractMovieWriter, frames: np.ndarray,
+                           color: str | None, dpi: int) -> None:
+    """The 3D blocks' faces and the measured points' paths, frame by frame."""
+    verts = history(res, "vertices")
+    mp = history(res, "measured_position")
+    steps, times = history(res, "step"), history(res, "time")
+    mesh = res.mesh
+    fig = plt.figure(figsize=(6.4, 5.6), layout="constrained")
+    ax = fig.add_subplot(projection="3d")
+    values = block_values(res, 0, color)
+    coll = plot_solid_blocks(ax, verts[0], mesh, values)
+    if values is not None:
+        all_values = np.concatenate([block_values(res, int(i), color) for i in frames])
+        coll.set_clim(float(all_values.min()), float(all_values.max()) or 1.0)
+        fig.colorbar(coll, ax=ax, label=color, shrink=0.6)
+    trails = [ax.plot([], [], [], lw=0.8)[0] for _ in range(mp.shape[1])]
+    solid_limits(ax, verts[frames].reshape(-1, verts.shape[-1]))
+
+    def draw(i: int) -> list:
+        coll.set_verts(solid_faces(verts[i], mesh)[0])
+        if values is not None:
+            coll.set_array(block_values(res, i, color)[mesh.face_block])
+        for k, line in enumerate(trails):
+            line.set_data_3d(*mp[: i + 1, k].T)
         ax.set_title(f"{method_label(res.method)}: step {int(steps[i])}, t = {float(times[i]):.4g} s")
         return [coll, *trails]
 

@@ -30,9 +30,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 __all__ = ["history", "quantity_names", "block_values", "method_label", "plot_blocks", "fig_configuration",
-           "fig_model",
+           "fig_model", "fig_solid_model", "plot_solid_blocks", "solid_faces", "solid_limits",
            "fig_trajectories", "fig_time_series",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index"]
 
@@ -117,7 +118,7 @@ def block_values(res: Results, index: int, color: str | None) -> np.ndarray | No
         return None
     if color == "speed":
         v = history(res, "velocity")[index]
-        return np.hypot(v[:, 0], v[:, 1])
+        return np.linalg.norm(v[:, : res.array("vertices").shape[-1]], axis=1)
     if color == "area_change":
         area = history(res, "area")
         return area[index] / area[0] - 1.0
@@ -172,6 +173,8 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     """
     if "vertices" not in getattr(res, "histories", {}):
         raise ValueError("drawing the model needs the vertex history of a results file (srdda run -o FILE.h5)")
+    if res.mesh is not None:
+        return fig_solid_model(res, index, color, trails)
     fig, ax = plt.subplots(figsize=(7, 5), layout="constrained")
     verts = res.array("vertices")
     index = index % len(verts)
@@ -189,6 +192,53 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     ax.set_ylim(allv[:, 1].min() - pad, allv[:, 1].max() + pad)
     ax.set(xlabel="x (m)", ylabel="y (m)",
            title=f"{method_label(res.method)}: step {int(res.array('step')[index])}, "
+                 f"t = {float(res.array('time')[index]):.4g} s")
+    return fig
+
+
+def solid_faces(vertices: np.ndarray, mesh: Any) -> tuple[list[np.ndarray], np.ndarray]:
+    """Every face of every 3D block as a polygon (k, 3), and the block of each face."""
+    rings = np.split(mesh.face_vertex, mesh.face_ptr[1:-1])
+    return [vertices[r] for r in rings], mesh.face_block
+
+
+def plot_solid_blocks(ax: Any, vertices: np.ndarray, mesh: Any, values: np.ndarray | None = None,
+                      cmap: str = "viridis") -> Poly3DCollection:
+    """Draw 3D blocks by their faces on 3D axes, coloured by ``values`` (one per block) when given."""
+    faces, face_block = solid_faces(vertices, mesh)
+    coll = Poly3DCollection(faces, edgecolor="k", linewidth=0.4, alpha=0.85, cmap=cmap,
+                            facecolor=None if values is not None else "#c8d6e5")
+    if values is not None:
+        coll.set_array(np.asarray(values, dtype=float)[face_block])
+    ax.add_collection3d(coll)
+    return coll
+
+
+def solid_limits(ax: Any, points: np.ndarray) -> None:
+    """Equal scales on the three axes around ``points`` (n, 3)."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre, half = 0.5 * (lo + hi), 0.55 * float(np.max(hi - lo) or 1.0)
+    ax.set(xlim=(centre[0] - half, centre[0] + half), ylim=(centre[1] - half, centre[1] + half),
+           zlim=(centre[2] - half, centre[2] + half), xlabel="x (m)", ylabel="y (m)", zlabel="z (m)")
+    ax.set_box_aspect((1, 1, 1))
+
+
+def fig_solid_model(res: Results, index: int = -1, color: str | None = "speed", trails: bool = True) -> Figure:
+    """3D blocks at recorded step ``index`` (their faces), with the measured points' paths so far."""
+    verts = res.array("vertices")
+    index = index % len(verts)
+    fig = plt.figure(figsize=(7, 6), layout="constrained")
+    ax = fig.add_subplot(projection="3d")
+    values = block_values(res, index, color)
+    coll = plot_solid_blocks(ax, verts[index], res.mesh, values)
+    if values is not None:
+        fig.colorbar(coll, ax=ax, label=color, shrink=0.6)
+    if trails:
+        mp = history(res, "measured_position")
+        for k in range(mp.shape[1]):
+            ax.plot(*mp[: index + 1, k].T, lw=0.8, label=f"point {k}")
+    solid_limits(ax, verts.reshape(-1, verts.shape[-1]))
+    ax.set_title(f"{method_label(res.method)}: step {int(res.array('step')[index])}, "
                  f"t = {float(res.array('time')[index]):.4g} s")
     return fig
 
