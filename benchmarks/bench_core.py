@@ -75,13 +75,18 @@ def main() -> None:
         for method in srdda.METHODS:
             rows.append({"model": f"{args.chain}-block chain", "method": method, "solver": solver,
                          "ms_per_step": 1e3 * time_steps(chain, method, args.steps, solver)})
+    report(rows, args.json)
+
+
+def report(rows: list[dict], json_path: str | None) -> None:
+    """Print the rows (model, method[, solver], ms per step) with the machine; write them as JSON if asked."""
     machine = f"{platform.processor() or platform.machine()}, {platform.python_implementation()} " \
               f"{platform.python_version()}, numpy {np.__version__}"
     print(f"machine: {machine}")
     for r in rows:
-        print(f"{r['model']:22s} {r['method']:6s} {r['solver']:8s} {r['ms_per_step']:9.3f} ms/step")
-    if args.json:
-        with open(args.json, "w") as fh:
+        print(f"{r['model']:22s} {r['method']:6s} {r.get('solver', ''):8s} {r['ms_per_step']:9.3f} ms/step")
+    if json_path:
+        with open(json_path, "w") as fh:
             json.dump({"machine": machine, "rows": rows}, fh, indent=1)
 
 

@@ -9,13 +9,12 @@ Usage: python benchmarks/bench_solid.py [--chain 1000] [--steps 100] [--json out
 from __future__ import annotations
 
 import argparse
-import json
-import platform
 import time
 
 import numpy as np
 
 import srdda
+from bench_core import report
 from srdda.geometry.polyhedron import box
 
 
@@ -64,14 +63,7 @@ def main() -> None:
     chain = chain_3d(args.chain)
     rows += [{"model": f"{args.chain}-box 3D chain", "method": m,
               "ms_per_step": 1e3 * time_steps(chain, m, args.steps)} for m in srdda.METHODS]
-    machine = f"{platform.processor() or platform.machine()}, {platform.python_implementation()} " \
-              f"{platform.python_version()}, numpy {np.__version__}"
-    print(f"machine: {machine}")
-    for r in rows:
-        print(f"{r['model']:22s} {r['method']:6s} {r['ms_per_step']:9.3f} ms/step")
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump({"machine": machine, "rows": rows}, fh, indent=1)
+    report(rows, args.json)
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import shutil
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
@@ -102,10 +103,7 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
         ax.set_title(f"{method_label(res.method)}: step {int(steps[i])}, t = {float(times[i]):.4g} s")
         return [coll, *trails]
 
-    anim = animation.FuncAnimation(fig, draw, frames=[int(i) for i in frames], blit=False)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(out, writer=writer, dpi=dpi)
-    plt.close(fig)
+    _save(fig, draw, frames, out, writer, dpi)
 
 
 def _write_solid_animation(res: StoredResult, out: Path, writer: animation.AbstractMovieWriter, frames: np.ndarray,
@@ -135,6 +133,12 @@ def _write_solid_animation(res: StoredResult, out: Path, writer: animation.Abstr
         ax.set_title(f"{method_label(res.method)}: step {int(steps[i])}, t = {float(times[i]):.4g} s")
         return [coll, *trails]
 
+    _save(fig, draw, frames, out, writer, dpi)
+
+
+def _save(fig: plt.Figure, draw: Callable[[int], list], frames: np.ndarray, out: Path,
+          writer: animation.AbstractMovieWriter, dpi: int) -> None:
+    """Draw every frame with ``draw`` and write the animation."""
     anim = animation.FuncAnimation(fig, draw, frames=[int(i) for i in frames], blit=False)
     out.parent.mkdir(parents=True, exist_ok=True)
     anim.save(out, writer=writer, dpi=dpi)
