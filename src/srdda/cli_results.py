@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 from tqdm import tqdm
 
-from .io.results_store import ResultsFileError, StoredResult, read_results, resume
+from .io.results_store import ResultsFileError, ResultsWriteError, StoredResult, read_results, resume
 
 __all__ = ["plot_command", "animate_command", "vtk_command", "resume_run", "report_paper"]
 
@@ -31,13 +31,17 @@ def resume_run(path: str, quiet: bool = False, flush_every: int | None = None) -
     """Continue a results file's run to its last step (``srdda run --resume``); returns the final status."""
     try:
         stored = read_results(path)
-        last = int(stored.settings.n_steps)
-        done = int(stored.step[-1]) if len(stored.step) else 0
-        with tqdm(total=max(0, last - done), disable=True if quiet else None, unit="step",
+        steps = stored.histories.get("step", [])
+        if len(steps) == 0:
+            click.echo(f"{path}: the run stopped before its first flush; restarting it from the beginning", err=True)
+        done = int(steps[-1]) if len(steps) else 0
+        with tqdm(total=max(0, int(stored.settings.n_steps) - done), disable=True if quiet else None, unit="step",
                   desc=f"resume {stored.method}") as bar:
             result = resume(path, flush_every=flush_every, progress=lambda _: bar.update(1))
     except ResultsFileError as exc:
         raise click.UsageError(str(exc)) from None
+    except ResultsWriteError as exc:
+        raise click.ClickException(str(exc)) from None
     final = read_results(path)
     click.echo(f"{result.status}: {path} now holds steps {int(final.step[0])}..{int(final.step[-1])} "
                f"({len(final.step)} recorded)")
