@@ -412,12 +412,12 @@ class ResultsStore:
     def finish(self, status: str, state: State) -> None:
         """Write what is buffered, a final checkpoint and the status; close the file and release it."""
         if self._file is None:
-            self._release()
+            self.release()
             return
         self._state = state if state.step >= self._last_step else self._state
         self.flush()
         self._guarded(lambda: self._set_status_and_close(status))
-        self._release()
+        self.release()
 
     # -- holding the output -------------------------------------------------------
     def acquire(self) -> None:
@@ -430,10 +430,11 @@ class ResultsStore:
             return
         self._lock = _take_lock(self.path)
         if not self.append and not self.overwrite and self.path.exists():
-            self._release()
+            self.release()
             raise OutputExistsError(f"{self.path} exists: {_describe(self.path)}")
 
-    def _release(self) -> None:
+    def release(self) -> None:
+        """Drop the output's lock (and the disk reserve); :meth:`finish` does it at the end of a run."""
         if self._lock is not None:
             _free_reserve(self.path)
             _release_lock(self.path, self._lock)
@@ -483,7 +484,7 @@ class ResultsStore:
                 cut_short = True
         if f is not None and cut_short:
             _detach(f)
-        self._release()
+        self.release()
         kept = (f"every step up to step {self._flushed_step}" if self._flushed_step >= 0
                 else "no step (it failed before its first flush)")
         if f is not None and cut_short:
