@@ -50,10 +50,11 @@ def test_srdda_conserves_energy(results):
     # acceptance: total mechanical energy after 1800 steps within 1% of the initial, measured from
     # the hanging rest position (both sticks vertical below A: centroids at y = -0.5 and -1.5 m),
     # so the initial energy is the potential energy 2 m g (0.5 + 1.5)/2·2 = 5000 J per m.
+    # Measured: 3e-6 of it (docs/constraints.md); the bound 1e-4 keeps a factor 30 for platforms.
     e = results["srdda"].energy
     e0 = e[0]["total"] + STICK_MASS * 10.0 * (0.5 + 1.5)
     e_end = e[-1]["total"] + STICK_MASS * 10.0 * (0.5 + 1.5)
-    assert abs(e_end - e0) <= 0.01 * e0
+    assert abs(e_end - e0) <= 1e-4 * e0
     # the hinge does no work under srdda (constraint kept exactly)
     assert abs(e[-1]["work_constraints"]) <= 1e-6 * e0
 
