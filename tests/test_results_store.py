@@ -215,3 +215,41 @@ def test_resume_with_contacts_and_cut_steps_is_exact(tmp_path: Path) -> None:
     for name in ("vertices", "velocity", "stress", "rotation"):
         a, b = getattr(got, name), getattr(ref_state, name)
         assert np.max(np.abs(a - b)) <= 1e-12 * max(1.0, np.max(np.abs(b))), name
+
+
+@pytest.mark.slow
+def test_sigkill_at_20_random_steps_then_resume_equals_the_uninterrupted_run_bit_for_bit(tmp_path: Path) -> None:
+    # Acceptance of issue 15: a run SIGKILLed at a random moment, then resumed, equals the uninterrupted run
+    # bit for bit. The 20 kill steps are drawn with a fixed seed; each forked child kills itself at its step
+    # (from inside the time loop, so no timing is involved), wherever that falls between two flushes.
+    n_steps, flush = 400, 20
+    settings = rod_settings("srdda", n_steps)
+    reference = srdda.run(rod_model(), settings)
+    kill_steps = np.random.default_rng(15).choice(np.arange(1, n_steps), size=20, replace=False)
+    for kill_step in sorted(int(s) for s in kill_steps):
+        path = tmp_path / f"killed_at_{kill_step}.h5"
+        pid = os.fork()
+        if pid == 0:  # the child
+            def progress(step: int) -> None:
+                if step == kill_step:
+                    os.kill(os.getpid(), signal.SIGKILL)
+
+            try:
+                srdda.run(rod_model(), settings, progress=progress,
+                          recorders=[ResultsStore(path, settings, flush_every=flush)])
+            finally:
+                os._exit(1)  # not reached: the child dies by its own SIGKILL
+        _, status = os.waitpid(pid, 0)
+        assert os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
+        if kill_step < flush - 1:  # killed before its first flush: the file holds the header only
+            assert "step" not in read_results(path).histories
+        else:
+            assert read_results(path).step[-1] == (kill_step + 1) // flush * flush - 1
+        resume(path)
+        stored = read_results(path)
+        assert stored.completed, kill_step
+        for name in ("step", "time", "velocity", "centroid", "rotation", "stress", "energy", "measured_position"):
+            np.testing.assert_array_equal(stored.array(name), reference.array(name), err_msg=f"{name} {kill_step}")
+        final = load_checkpoint(path, rod_model().arrays())
+        for name in STATE_FIELDS:
+            np.testing.assert_array_equal(getattr(final, name), getattr(reference.final_state, name), err_msg=name)

@@ -24,17 +24,22 @@ Layout (see docs/results.md)::
                       (see :mod:`srdda.io.checkpoint`)
     /contacts/<name>  rows of all recorded contacts, ``offsets`` (k+1) and ``step`` (k)
 
-Every appended dataset only grows, so the extent stored at the last flush is
-always consistent; readers take the shortest extent of a group as its length.
+Every appended dataset only grows. A flush writes in three phases, each
+flushed to the file: the data rows (histories, contact rows, checkpoint
+fields), then the ``step`` rows that make them count (history, contacts), then
+the checkpoint's ``step``. Readers take the shortest extent of a group, cut
+where ``step`` stops increasing, as its length; so a flush cut short anywhere
+leaves exactly the earlier flushes visible, and a checkpoint only counts once
+every step up to it is on disk.
 
 Output safety (docs/reliability.md): a store holds its file from the first
-write to :meth:`ResultsStore.finish` by an OS lock on ``<file>.lock`` (taken
-before the HDF5 file is opened; it names the run holding it), never truncates
-an existing file (a replaced file is unlinked first, so a reader keeps its
-copy), and keeps ``<file>.reserve``, disk space for one flush, which it frees
-when a write fails so that the interrupted flush and the close can complete:
-the run then stops with one :class:`ResultsWriteError` and the file keeps every
-flushed step, ready for :func:`resume`.
+write (or :meth:`ResultsStore.acquire`) to :meth:`ResultsStore.finish` by an
+OS lock on ``<file>.lock`` taken before the HDF5 file is opened, which names
+the run holding it; it never truncates an existing file (a replaced file is
+unlinked first, so a reader keeps its copy); before each flush it checks that
+the disk has room for it and keeps ``<file>.reserve`` (room for one flush) to
+close the file cleanly when the disk is full. A failed write stops the run
+with one :class:`ResultsWriteError` saying which steps the file keeps.
 """
 from __future__ import annotations
 
@@ -519,8 +524,8 @@ class ResultsStore:
         """
         f = self._file
         hist, contacts, cp = f["history"], f["contacts"], f["checkpoint"]
-        new_checkpoint = self._state is not None and (
-            checkpoint_count(cp) == 0 or cp["step"][checkpoint_count(cp) - 1] != self._state.step)
+        n_cp = checkpoint_count(cp)
+        new_checkpoint = self._state is not None and (n_cp == 0 or cp["step"][n_cp - 1] != self._state.step)
 
         def data() -> None:
             for name, rows in self._buffer.items():
