@@ -203,7 +203,8 @@ def test_a_full_disk_in_the_cli_is_one_message(tmp_path: Path, monkeypatch: pyte
 
 # -- no traceback on bad input ----------------------------------------------------------------------------------------
 BAD_FILES = {
-    "latin1.toml": ('title = "Pente d\'\xe9boulement"\n'.encode("latin-1"), "not a UTF-8 text file (byte 0xe9 on line 1"),
+    "latin1.toml": ('title = "Pente d\'\xe9boulement"\n'.encode("latin-1"),
+                    "not a UTF-8 text file (byte 0xe9 on line 1"),
     "binary.toml": (bytes(range(256)) * 4, "not a UTF-8 text file"),
     "nul.toml": (b"title = 'x'\n\x00\x00\x00\x00", "not a text file (it holds NUL bytes"),
     "truncated.toml": (ROD.read_bytes()[:ROD.read_bytes().index(b"vertices = [[") + 20], "not valid TOML"),

@@ -85,7 +85,8 @@ def test_measured_damping_of_a_resolved_oscillation_is_the_schemes_closed_form(r
     assert abs((1 - measured**steps_per_period) - loss_per_period) <= 1e-2 * loss_per_period
     if rho == 1.0:
         # Shi's scheme with the spring force at the end of the step: |λ|² = 2/(2 + (ωΔt)²) (characteristic
-        # polynomial (2 + Ω²)λ² + (Ω² - 4)λ + 2), a loss of about π ωΔt/2 per period: 9.39% at T/100, 38.2% at T/20
+        # polynomial (2 + Ω²)λ² + (Ω² - 4)λ + 2), a loss of about π ωΔt/2 per period: 9.39% at T/100,
+        # 38.2% at T/20
         assert root == pytest.approx((1 + (omega * dt) ** 2 / 2) ** -0.5, rel=1e-14)
         assert loss_per_period == pytest.approx({100: 0.0939, 20: 0.3823}[steps_per_period], abs=1e-4)
 

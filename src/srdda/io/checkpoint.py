@@ -30,7 +30,8 @@ import numpy as np
 
 from ..geometry.polygon import BlockMoments
 
-__all__ = ["append_checkpoint", "commit_checkpoint", "checkpoint_count", "increasing_prefix", "truncate_checkpoints", "read_checkpoint"]
+__all__ = ["append_checkpoint", "commit_checkpoint", "checkpoint_count", "increasing_prefix", "truncate_checkpoints",
+           "read_checkpoint"]
 
 SKIPPED = ("step", "time", "moments")
 

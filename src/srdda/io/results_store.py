@@ -148,6 +148,7 @@ except ImportError:  # Windows
     import msvcrt
 
     def _try_lock(fh: IO[str]) -> bool:
+        fh.seek(0)  # every run locks the same (first) byte
         try:
             msvcrt.locking(fh.fileno(), msvcrt.LK_NBLCK, 1)
         except OSError:
@@ -588,7 +589,7 @@ class ResultsStore:
             return
         if self.path.exists():  # unlink, never truncate: a reader of the old file keeps its copy
             self.path.unlink()
-        f = h5py.File(self.path, "w-")
+        f = self._file = h5py.File(self.path, "w-")
         f.attrs.update({"format": FORMAT, "format_version": FORMAT_VERSION, "method": self.settings.method,
                         "status": "running", "last_step": state.step + self.settings.n_steps,
                         "flush_every": self.flush_every, "contact_every": self.contact_every,
@@ -603,7 +604,6 @@ class ResultsStore:
         f.create_group("checkpoint")
         f.create_group("contacts")
         f.flush()
-        self._file = f
 
 
 def _reason(exc: BaseException) -> str:
