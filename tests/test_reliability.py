@@ -144,6 +144,18 @@ def test_resume_of_a_run_stopped_before_its_first_flush_restarts_it(tmp_path: Pa
     _assert_same_state(path, reference)
 
 
+def test_a_results_file_cut_short_in_its_header_is_one_message(tmp_path: Path) -> None:
+    import h5py
+
+    path = tmp_path / "results.h5"
+    with h5py.File(path, "w") as f:  # what a kill while the store writes the header can leave
+        f.attrs["format"] = results_store.FORMAT
+        f.create_group("settings")
+    for args in (["run", "--resume", str(path)], ["plot", str(path)]):
+        out = _one_message(CliRunner().invoke(main, args), 2)
+        assert "an incomplete results file (no model, history, checkpoint, contacts" in out
+
+
 def _failing_after(calls: int, where: str, monkeypatch: pytest.MonkeyPatch) -> None:
     """Make the ``calls``-th call of ``results_store.<where>`` fail as a full disk does.
 

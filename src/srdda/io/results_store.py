@@ -343,6 +343,11 @@ def _open_read(path: str | Path) -> h5py.File:
     if f.attrs.get("format") != FORMAT:
         f.close()
         raise ResultsFileError(f"{path}: not an srdda results file (no format={FORMAT!r} attribute)")
+    missing = [g for g in ("settings", "model", "history", "checkpoint", "contacts") if g not in f]
+    if missing or "last_step" not in f.attrs:
+        f.close()
+        raise ResultsFileError(f"{path}: an incomplete results file (no {', '.join(missing) or 'last_step'}: the "
+                               "run was stopped while it created the file); run the model again")
     return f
 
 
