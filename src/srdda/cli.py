@@ -124,7 +124,8 @@ def run_command(model: str | None, method: str | None, steps: int | None, out: s
     try:
         store.acquire()  # before the run starts: fail at once if the output is taken
     except OutputExistsError as exc:
-        raise click.ClickException(f"{exc}; pass --overwrite to replace them, or choose another --out") from None
+        raise click.ClickException(f"{exc}; pass --overwrite to replace them, choose another --out, or (a run "
+                                   f"that did not finish) continue it with: srdda run --resume {store.path}") from None
     except ResultsWriteError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"writing {store.path}")
