@@ -172,7 +172,12 @@ def _take_lock(path: Path) -> IO[str]:
             fh = open(lock, "a+", encoding="utf-8")
         except OSError as exc:
             raise ResultsWriteError(f"{path}: cannot write in {path.parent} ({exc.strerror})") from None
-        if not _try_lock(fh):
+        try:
+            locked = _try_lock(fh)
+        except OSError as exc:  # a file system without locks (some network mounts)
+            fh.close()
+            raise ResultsWriteError(f"{path}: cannot lock {lock} ({exc.strerror}); write to a local disk") from None
+        if not locked:
             fh.seek(0)
             holder = fh.read().strip() or "a run that has not said who it is yet"
             fh.close()
