@@ -84,15 +84,26 @@ def test_vtk_command_writes_a_series(rod_run: Path, tmp_path: Path) -> None:
 
 
 CHILD = textwrap.dedent('''
-    import sys
+    import os, signal, sys
     from dataclasses import replace
     import srdda
     from srdda.io.modelfile import load_model
     from srdda.io.results_store import ResultsStore
+
+    class KilledStore(ResultsStore):
+        """SIGKILLs its own process right after its 10th flush: a deterministic kill, no timing involved."""
+        flushes = 0
+
+        def flush(self):
+            super().flush()
+            self.flushes += 1
+            if self.flushes == 10:
+                os.kill(os.getpid(), signal.SIGKILL)
+
     model, settings = load_model(sys.argv[2])
     settings = replace(settings, n_steps=1500)
-    store = ResultsStore(sys.argv[1], settings, flush_every=50, model_text=open(sys.argv[2]).read())
-    srdda.run(model, settings, progress=lambda s: print(s, flush=True), recorders=[store])
+    store = KilledStore(sys.argv[1], settings, flush_every=50, model_text=open(sys.argv[2]).read())
+    srdda.run(model, settings, recorders=[store])
 ''')
 
 
@@ -101,15 +112,10 @@ def test_run_resume_after_sigkill_reaches_the_uninterrupted_state(tmp_path: Path
     script.write_text(CHILD)
     path = tmp_path / "results.h5"
     env = {**os.environ, "PYTHONPATH": str(Path(srdda.__file__).parents[1])}
-    child = subprocess.Popen([sys.executable, str(script), str(path), str(ROD)], stdout=subprocess.PIPE, text=True,
-                             env=env)
-    for line in child.stdout:
-        if int(line) >= 500:
-            os.kill(child.pid, signal.SIGKILL)
-            break
-    child.wait()
+    child = subprocess.run([sys.executable, str(script), str(path), str(ROD)], env=env, capture_output=True, text=True)
+    assert child.returncode == -signal.SIGKILL, child.stderr
     killed = read_results(path)
-    assert killed.status == "running" and 450 <= killed.step[-1] < 1500
+    assert killed.status == "running" and killed.step[-1] == 499  # 10 flushes of 50 recorded steps
 
     result = CliRunner().invoke(main, ["run", "--resume", str(path), "--quiet"])
     assert result.exit_code == 0, result.output

@@ -54,10 +54,11 @@ def test_srdda_conserves_energy(results):
     # acceptance: total mechanical energy after 1800 steps within 1% of the initial, measured from
     # the hanging rest position (both sticks vertical below A: centroids at y = -0.5 and -1.5 m),
     # so the initial energy is the potential energy 2 m g (0.5 + 1.5)/2·2 = 5000 J per m.
+    # Measured: 3e-6 of it (docs/constraints.md); the bound 1e-4 keeps a factor 30 for platforms.
     e = results["srdda"].energy
     e0 = e[0]["total"] + STICK_MASS * 10.0 * (0.5 + 1.5)
     e_end = e[-1]["total"] + STICK_MASS * 10.0 * (0.5 + 1.5)
-    assert abs(e_end - e0) <= 0.01 * e0
+    assert abs(e_end - e0) <= 1e-4 * e0
     # the hinge does no work under srdda (constraint kept exactly)
     assert abs(e[-1]["work_constraints"]) <= 1e-6 * e0
 
@@ -118,7 +119,7 @@ def test_sparse_saddle_solver_keeps_the_hinge(method):
 
 @pytest.mark.parametrize("method", ["dda0", "dda1", "srdda"])
 def test_model_file_with_contacts_runs_as_the_builder(method):
-    # examples/paper/nunchaku.toml leaves contacts on; the paper's builder switches them off. The
+    # the paper's nunchaku.toml leaves contacts on; the paper's builder switches them off. The
     # two sticks are hinged, so their faces are no contact and neither may their g2 step limit cut
     # the step: the ω histories agree to 1e-9 rad/s (measured: identical). Before hinged pairs
     # were left out of contact they differed by up to 7.7 rad/s.

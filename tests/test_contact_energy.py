@@ -28,8 +28,10 @@ def _energy(res, key):
 @pytest.mark.parametrize("method", ["dda1", "srdda"])
 @pytest.mark.parametrize("phi", [0.0, 30.0])
 def test_bounces_never_create_energy(method, phi):
-    # Acceptance: total energy never above the initial by more than 1% of the block's mechanical
-    # energy (kinetic + potential above the base). Measured: below 1e-9 of it.
+    # Total energy never above the initial (the issue's acceptance: by 1% of the block's mechanical
+    # energy, kinetic + potential above the base). Measured: 9e-15 of it (round-off) for every method
+    # and friction angle; the bound 1e-10 leaves 4 orders for round-off elsewhere, while an impact that
+    # creates energy (1.48x the kinetic energy in issue 15) exceeds it by 9 orders.
     res = srdda.run(_tumbling_drop(method, phi), srdda.RunSettings(dt=5e-4, n_steps=600, method=method,
                                                                      penalty=5e12, max_displacement_ratio=0.002))
     assert res.completed, res.status
@@ -37,7 +39,7 @@ def test_bounces_never_create_energy(method, phi):
     total = _energy(res, "total")
     mass = 2600.0 * 0.12
     scale = _energy(res, "kinetic")[0] + mass * 10.0 * res.array("centroid")[0, 1, 1]  # kinetic + m g h above the base
-    assert np.max(total - total[0]) <= 1e-2 * scale
+    assert np.max(total - total[0]) <= 1e-10 * scale
 
 
 @pytest.fixture(scope="module")
@@ -67,13 +69,14 @@ def test_rockfall_penetration_within_tolerance_every_step(rockfall_srdda):
 
 
 def test_rockfall_energy_never_created(rockfall_srdda):
-    # Acceptance: total energy never above the initial by more than 1% (of the stone's energy
-    # above the slope's base; the fixed slope's own weight is a constant left out of the scale).
+    # Total energy never above the initial (acceptance: by 1% of the stone's energy above the slope's
+    # base; the fixed slope's own weight is a constant left out of the scale). Measured: 3.6e-14 of it
+    # (round-off); the bound 1e-10 leaves 3 orders for round-off elsewhere.
     _, _, res = rockfall_srdda
     total = _energy(res, "total")
     mass = rockfall.STONE_DENSITY * np.prod(rockfall.STONE_SIZE)
     scale = _energy(res, "kinetic")[0] + mass * 10.0 * res.array("centroid")[0, 1, 1]
-    assert np.max(total - total[0]) <= 1e-2 * scale
+    assert np.max(total - total[0]) <= 1e-10 * scale
     assert total[-1] < total[0]  # friction and impacts did dissipate
 
 
@@ -137,8 +140,9 @@ def test_block_bridging_an_acute_corner_rests_without_gaining_energy(method):
     # geometry of the jointed slope's explosion). Once the corner settles into the top edge
     # it also lies 4.9 mm behind the line of the right edge (within 0.4 d0 = 7 mm): counted as
     # a contact with that edge, it got a 4.9 mm deep spring of ½ k g² = 1.2e5 J and the block
-    # flew off at 3.4 m/s (15 kJ gained). Bound: 1% of m g × block height (5000 J); a resting
-    # block may only lose energy (measured: never above the initial). Speed bound 0.05 m/s:
+    # flew off at 3.4 m/s (15 kJ gained). A resting block may only lose energy: measured never above
+    # the initial (0.0 for every method); bound 1e-10 of m g × block height (5000 J), room for
+    # round-off only. Speed bound 0.05 m/s:
     # the settling under gravity onto 1e10 N/m springs moves it at about 2e-3 m/s.
     m = srdda.Model(gravity=(0.0, -10.0))
     m.add_material("r", srdda.Material(2500.0, 1e9, 0.25))
@@ -151,7 +155,7 @@ def test_block_bridging_an_acute_corner_rests_without_gaining_energy(method):
     assert res.completed, res.status
     total = _energy(res, "total")
     mass = 2500.0 * 1.205 * 0.4
-    assert np.max(total - total[0]) <= 1e-2 * mass * 10.0 * 0.4
+    assert np.max(total - total[0]) <= 1e-10 * mass * 10.0 * 0.4
     speed = np.hypot(res.array("velocity")[:, 2, 0], res.array("velocity")[:, 2, 1])
     assert speed.max() < 0.05
     assert res.closed_contacts[-1] >= 3  # it rests on both supports

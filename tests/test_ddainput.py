@@ -16,7 +16,6 @@ from srdda.io.ddaml import read_ddaml
 from srdda.io.legacy import read_legacy
 
 DATA = Path(__file__).parent / "data"
-SHARED = Path("/work/shared")
 
 
 def test_legacy_sample_maps_geometry_and_parameters():
@@ -94,22 +93,112 @@ def test_bad_files_give_clear_errors(tmp_path):
     assert result.exit_code == 2 and "joint lines" in result.output
 
 
-SHARED_FILES = sorted((SHARED / "dda-inputs").rglob("*.geo")) + sorted((SHARED / "benchmarks").rglob("*.geo"))
+def _ddaml_geometry(joints, fixed_lines=(), fixed_points=(), load_points=(), hidden_points=()) -> str:
+    """A DDAML geometry as DDA for Windows writes it (joints "x1 y1 x2 y2" with a type, fixed lines or points,
+    load points, and a measured-point section commented out, as in its samples)."""
+    rows = "\n".join(f'      <Joint type="{t}"> {x1} {y1} {x2} {y2} </Joint>' for x1, y1, x2, y2, t in joints)
+    fixed = "".join(f"      <Line> {a} {b} {c} {d} </Line>\n" for a, b, c, d in fixed_lines)
+    fixed += "".join(f"      <Point> {x} {y} </Point>\n" for x, y in fixed_points)
+    loads = "".join(f"   <Point> {x} {y} </Point>\n" for x, y in load_points)
+    hidden = "".join(f"    <Point> {x} {y} </Point>\n" for x, y in hidden_points)
+    return ('<?xml version="1.0" standalone="no"?>\n<!DOCTYPE DDA SYSTEM "geometry.dtd">\n'
+            '<Berkeley:DDA xmlns:Berkeley="http://www.tsoft.com/~bdoolin/dda">\n<Berkeley:Geometry>\n'
+            f'   <Berkeley:Edgenodedist distance="0.01"/>\n   <Jointlist>\n{rows}\n   </Jointlist>\n'
+            f"   <Fixedpointlist>\n{fixed}   </Fixedpointlist>\n"
+            + (f"   <Loadpointlist>\n{loads}   </Loadpointlist>\n" if load_points else "")
+            + f"<!--\n   <Measuredpointlist>\n{hidden}   </Measuredpointlist>\n-->\n"
+            "</Berkeley:Geometry>\n</Berkeley:DDA>\n")
 
 
-@pytest.mark.skipif(not SHARED.exists(), reason="extra check on the project's shared samples (not in a user's clone)")
-@pytest.mark.parametrize("geo", SHARED_FILES, ids=lambda p: p.name)
-def test_every_shared_dda_input_loads(geo):
-    ana = geo.with_suffix(".ana")
-    if not ana.exists():  # fixedlines/case*.geo come without an analysis file
-        ana = SHARED / "dda-inputs" / "ddaml" / "pushblock.ana"
+def _box(x0, y0, x1, y1, t=1, over=0.0):
+    """A rectangle's four joints, each running ``over`` past its corners (as hand-drawn inputs do)."""
+    return [(x0, y0 - over, x0, y1 + over, t), (x0 - over, y1, x1 + over, y1, t),
+            (x1, y1 + over, x1, y0 - over, t), (x1 + over, y0, x0 - over, y0, t)]
+
+
+def _slope_joints():
+    """A 45° slope 0-60 x 0-20 m on a 5 m base, cut by two joint sets whose traces run past the boundary."""
+    outline = [(0, -5, 60, -5, 1), (60, -5, 60, 20, 1), (60, 20, 35, 20, 1), (35, 20, 15, 0, 1), (15, 0, 0, 0, 1),
+               (0, 0, 0, -5, 1), (15, 0, 60, 0, 1)]
+    dip25 = [(c, 0, c + 45, 45 * np.tan(np.radians(25)), 2) for c in (-10.0, 2.0, 14.0, 26.0, 38.0, 50.0)]
+    steep = [(c, -0.5, c - 4.0, 21.0, 2) for c in (24.0, 33.0, 42.0, 51.0)]
+    return outline + dip25 + steep
+
+
+SLOPE_AREA = 60 * 5 + 45 * 20 - 0.5 * 20 * 20  # base + slope profile (trapezoid 15-60 x 0-20 minus the cut)
+
+
+def _legacy_circular_slope(path: Path) -> None:
+    """Legacy text files (Shi's format) of a 2 x 1 m slope with a circular slip surface and 3 slices."""
+    arc = [(1.0 + 0.8 * np.cos(a), 1.0 + 0.8 * np.sin(a)) for a in np.linspace(np.pi, 2 * np.pi, 19)]
+    joints = [(*arc[i], *arc[i + 1], 1) for i in range(18)]  # the slip surface, (0.2, 1) down and up to (1.8, 1)
+    joints += [(0, 0, 2, 0, 2), (2, 0, 2, 1, 2), (2, 1, 0, 1, 2), (0, 1, 0, 0, 2)]  # the domain
+    joints += [(x, 1.05, x, 0.15, 3) for x in (0.6, 1.0, 1.4)]  # slices, running past the top edge and the arc
+    counts = [len(joints), 0, 0, 0, 2, 0, 1, 0]  # joints, boundary, material, bolts, fixed, loads, measured, holes
+    lines = ["0.01", f"{counts[0]} {counts[1]}", *map(str, counts[2:])]
+    lines += [" ".join(f"{v:.6f}" for v in j[:4]) + f" {j[4]}" for j in joints]
+    lines += ["1.9 0.1 1.9 0.1", "0.1 0.1 0.1 0.1", "0.5 0.9"]  # two fixed points (degenerate lines), a measured one
+    path.with_suffix(".geo").write_text("\n".join(lines) + "\n")
+    # static, 20 steps, one block material, three joint materials, g2 = 0.006, Δt = 0.01 s
+    path.with_suffix(".ana").write_text("0\n20\n1\n3\n0.006\n0.01\n2.0 19.6 1000000.0 0.3\n0 0 0\n0 0 0\n0 0 0\n"
+                                        "30 0 0\n30 0 0\n30 0 0\n")
+
+
+GENERATED_INPUTS = {
+    **{f"fixed-line-{blocks}-{name}": (_box(0, 0, blocks, 1) + ([(1, 0, 1, 1, 1)] if blocks == 2 else []),
+                                       [line], blocks, blocks * 1.0)
+       for blocks in (1, 2)
+       for name, line in (("crossing", (-0.5, 0.5, blocks + 0.5, 0.5)), ("inside", (0.1, 0.5, blocks - 0.1, 0.5)),
+                          ("just-past", (-0.1, 0.5, blocks + 0.1, 0.5)))},
+    "pushed-block": (_box(10, 10, 50, 20, over=0.02) + [(15, 19.99, 15, 25.01, 1), (14.99, 25, 20.01, 25, 1),
+                                                        (20, 25.01, 20, 19.99, 1)], [], 2, 400.0 + 25.0),
+    "jointed-slope": (_slope_joints(), [], None, SLOPE_AREA),
+}
+
+
+def _write_generated(tmp_path: Path, name: str) -> tuple[Path, Path]:
+    joints, fixed_lines, _, _ = GENERATED_INPUTS[name]
+    geo = tmp_path / f"{name}.geo"
+    fixed_points = [(12, 12), (12, 18), (48, 18), (48, 12)] if name == "pushed-block" else []
+    load = {"pushed-block": (17.5, 22.5), "jointed-slope": (55.0, -2.5)}.get(name, (0.5, 0.8))
+    geo.write_text(_ddaml_geometry(joints, fixed_lines, fixed_points, [load], [load]))
+    return geo, DATA / "tiny_ddaml.ana"  # a dynamic analysis with one time-varying point load
+
+
+@pytest.mark.parametrize("name", sorted(GENERATED_INPUTS))
+def test_generated_ddaml_inputs_load_with_every_block(tmp_path, name):
+    # DDAML inputs with the features of DDA for Windows' samples: joints running past their corners, fixed
+    # lines crossing, inside or just past the blocks, fixed points, a commented-out section, joint sets
+    # running past the boundary. Cutting must keep the domain: the block areas sum to its area (exact
+    # polygons: 1e-9 relative for the round-off of the intersections).
+    geo, ana = _write_generated(tmp_path, name)
+    _, _, n_blocks, area = GENERATED_INPUTS[name]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         data = read_dda(geo, ana)
-        model = data.to_model()
+        cut = data.cut()
+        model = data.to_model(cut)
         data.run_settings()
-    assert len(model.blocks) >= 1
+    inside = data.cut(domain_types=[1])  # the blocks inside the type-1 outline (the slope's sets close loops
+    if n_blocks is not None:              # in the air above its face too)
+        assert cut.n_blocks == inside.n_blocks == n_blocks
+    else:
+        assert inside.n_blocks > 20  # the two sets cut the slope into many blocks
+    assert abs(inside.areas().sum() - area) <= 1e-9 * area
+    assert len(model.blocks) == cut.n_blocks
     model.arrays()
+
+
+def test_generated_legacy_circular_slope_loads(tmp_path):
+    _legacy_circular_slope(tmp_path / "circle")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        data = read_dda(tmp_path / "circle.geo")
+        cut = data.cut()
+    # the arc and the three slices (their ends past the top edge and the arc are trimmed as dangling) cut
+    # the 2 x 1 m domain into 5 blocks: 4 slices of the sliding mass and the rest
+    assert cut.n_blocks == 5
+    assert abs(cut.areas().sum() - 2.0) <= 1e-9 * 2.0
 
 
 def test_domain_types_keep_only_blocks_inside_the_type_boundary():
@@ -189,9 +278,10 @@ def test_converted_samples_run_under_the_three_methods():
         _run_all_methods(read_ddaml(DATA / "tiny_ddaml.geo", DATA / "tiny_ddaml.ana"))
 
 
-@pytest.mark.skipif(not SHARED.exists(), reason="extra check on the project's shared samples (not in a user's clone)")
-@pytest.mark.parametrize("geo", ["legacy/circleslope.geo", "ddaml/pushblock.geo"])
-def test_shared_circleslope_and_pushblock_run_under_the_three_methods(geo):
+def test_generated_pushed_block_and_circular_slope_run_under_the_three_methods(tmp_path):
+    geo, ana = _write_generated(tmp_path, "pushed-block")
+    _legacy_circular_slope(tmp_path / "circle")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        _run_all_methods(read_dda(SHARED / "dda-inputs" / geo))
+        _run_all_methods(read_dda(geo, ana))
+        _run_all_methods(read_dda(tmp_path / "circle.geo"))

@@ -108,40 +108,63 @@ def test_contact_hook_appends_ragged_rows_at_its_interval(tmp_path: Path) -> Non
 
 
 CHILD = textwrap.dedent('''
-    import sys
+    import os, signal, sys
     {source}
+    from srdda.io import results_store
     from srdda.io.results_store import ResultsStore
-    settings = srdda.RunSettings(dt=1e-3, n_steps={n_steps}, method="srdda", penalty=2e16)
-    def progress(step):
-        print(step, flush=True)
-    srdda.run(rod_model(), settings, progress=progress,
-              recorders=[ResultsStore(sys.argv[1], settings, flush_every={flush})])
+
+    def kill(*_):
+        os.kill(os.getpid(), signal.SIGKILL)
+
+    class KilledStore(ResultsStore):
+        """SIGKILLs its own process at a fixed point of flush number {kill_flush} (0-based): deterministic."""
+        flushes = 0
+
+        def flush(self):
+            if self.flushes == {kill_flush} and "{where}" != "after":
+                real_append = results_store._append
+
+                def append(group, name, rows, chunk_rows):
+                    if "{where}" == "data" and group.name == "/history" and name == "stress":
+                        kill()  # half-way through the data phase: some histories appended, not flushed
+                    return real_append(group, name, rows, chunk_rows)
+
+                results_store._append = append
+                results_store.commit_checkpoint = kill  # "commit": data and steps flushed, checkpoint not
+            super().flush()
+            if self.flushes == {kill_flush}:
+                kill()
+            self.flushes += 1
+
+    settings = srdda.RunSettings(dt=1e-3, n_steps={n_steps}, method="{method}", penalty=2e16)
+    srdda.run(rod_model(), settings, recorders=[KilledStore(sys.argv[1], settings, flush_every={flush})])
 ''')
 
 
-@pytest.mark.parametrize("method", ["dda1", "srdda"])
-def test_sigkill_leaves_every_flushed_step_and_resume_matches(tmp_path: Path, method: str) -> None:
-    n_steps, flush, kill_after = 1500, 25, 400
+@pytest.mark.parametrize("method,where", [("dda1", "after"), ("srdda", "after"), ("srdda", "commit"),
+                                          ("srdda", "data")])
+def test_sigkill_leaves_every_flushed_step_and_resume_matches(tmp_path: Path, method: str, where: str) -> None:
+    # The child kills itself at a fixed point of its 17th flush (no timing involved): right after it
+    # ("after"), before the checkpoint's step row is written ("commit"), or half-way through appending the
+    # histories ("data"). Every flush before it must be in the file, and resume must complete the run.
+    n_steps, flush, kill_flush = 1500, 25, 16
     script = tmp_path / "child.py"
-    script.write_text(CHILD.format(source=ROD_SOURCE, n_steps=n_steps, flush=flush).replace('"srdda", penalty',
-                                                                                             f'"{method}", penalty'))
+    script.write_text(CHILD.format(source=ROD_SOURCE, n_steps=n_steps, flush=flush, kill_flush=kill_flush,
+                                   method=method, where=where))
     path = tmp_path / "killed.h5"
     env = {**os.environ, "PYTHONPATH": str(Path(srdda.__file__).parents[1])}
-    child = subprocess.Popen([sys.executable, str(script), str(path)], stdout=subprocess.PIPE, text=True, env=env)
-    for line in child.stdout:  # kill the run once it is well past its first flushes
-        if int(line) >= kill_after:
-            os.kill(child.pid, signal.SIGKILL)
-            break
-    child.wait()
-    assert child.returncode == -signal.SIGKILL
+    child = subprocess.run([sys.executable, str(script), str(path)], env=env, capture_output=True, text=True)
+    assert child.returncode == -signal.SIGKILL, child.stderr
 
     killed = read_results(path)
-    n = len(killed.step)
+    # the rows the file shows: whole flushes only (the first record is step 0); "commit" shows the steps of the
+    # flush it was killed in (they were flushed), and its checkpoint is still the previous flush's
+    n = flush * (kill_flush + (where == "commit") + (where == "after"))
     assert killed.status == "running"  # it never finished
-    assert kill_after - flush <= n - 1 < n_steps
-    assert n % flush == 0  # whole flushes only (the first record is step 0)
     np.testing.assert_array_equal(killed.step, np.arange(n))
     assert np.all(np.isfinite(killed.velocity)) and np.all(np.isfinite(killed.vertices))
+    checkpoint_step = flush * (kill_flush + (where == "after")) - 1
+    assert load_checkpoint(path, rod_model().arrays()).step == checkpoint_step
 
     settings = rod_settings(method, n_steps)
     reference = srdda.run(rod_model(), settings)
@@ -192,3 +215,41 @@ def test_resume_with_contacts_and_cut_steps_is_exact(tmp_path: Path) -> None:
     for name in ("vertices", "velocity", "stress", "rotation"):
         a, b = getattr(got, name), getattr(ref_state, name)
         assert np.max(np.abs(a - b)) <= 1e-12 * max(1.0, np.max(np.abs(b))), name
+
+
+@pytest.mark.slow
+def test_sigkill_at_20_random_steps_then_resume_equals_the_uninterrupted_run_bit_for_bit(tmp_path: Path) -> None:
+    # Acceptance of issue 15: a run SIGKILLed at a random moment, then resumed, equals the uninterrupted run
+    # bit for bit. The 20 kill steps are drawn with a fixed seed; each forked child kills itself at its step
+    # (from inside the time loop, so no timing is involved), wherever that falls between two flushes.
+    n_steps, flush = 400, 20
+    settings = rod_settings("srdda", n_steps)
+    reference = srdda.run(rod_model(), settings)
+    kill_steps = np.random.default_rng(15).choice(np.arange(1, n_steps), size=20, replace=False)
+    for kill_step in sorted(int(s) for s in kill_steps):
+        path = tmp_path / f"killed_at_{kill_step}.h5"
+        pid = os.fork()
+        if pid == 0:  # the child
+            def progress(step: int) -> None:
+                if step == kill_step:
+                    os.kill(os.getpid(), signal.SIGKILL)
+
+            try:
+                srdda.run(rod_model(), settings, progress=progress,
+                          recorders=[ResultsStore(path, settings, flush_every=flush)])
+            finally:
+                os._exit(1)  # not reached: the child dies by its own SIGKILL
+        _, status = os.waitpid(pid, 0)
+        assert os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
+        if kill_step < flush - 1:  # killed before its first flush: the file holds the header only
+            assert "step" not in read_results(path).histories
+        else:
+            assert read_results(path).step[-1] == (kill_step + 1) // flush * flush - 1
+        resume(path)
+        stored = read_results(path)
+        assert stored.completed, kill_step
+        for name in ("step", "time", "velocity", "centroid", "rotation", "stress", "energy", "measured_position"):
+            np.testing.assert_array_equal(stored.array(name), reference.array(name), err_msg=f"{name} {kill_step}")
+        final = load_checkpoint(path, rod_model().arrays())
+        for name in STATE_FIELDS:
+            np.testing.assert_array_equal(getattr(final, name), getattr(reference.final_state, name), err_msg=name)

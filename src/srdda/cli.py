@@ -1,11 +1,14 @@
 """The ``srdda`` command line: run model files and the paper's examples.
 
 Errors in the input are reported as one message naming the field (exit 2);
-a run that diverges stops, keeps what it recorded and exits with 3.
+an output that cannot be written (held by another run, holding a finished
+run's results, a folder not writable, a full disk) as one message saying what
+is kept (exit 1); a run that diverges stops, keeps what it recorded and exits with 3.
 """
 from __future__ import annotations
 
 import json
+import os
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -19,8 +22,8 @@ from . import __version__
 from .integrators.methods import METHODS
 from .cli_results import animate_command, plot_command, report_paper, resume_run, vtk_command
 from .io.convert import convert
-from .io.modelfile import ModelFileError, format_validation, load_model
-from .io.results_store import ResultsStore
+from .io.modelfile import ModelFileError, format_validation, load_model, read_model_text
+from .io.results_store import OutputExistsError, ResultsStore, ResultsWriteError
 from .paper import EXAMPLES, relative_error, run_example
 from .results import Result
 from .settings import RunSettings
@@ -68,19 +71,50 @@ def save_histories(result: Result, out: Path) -> Path:
     return out / "histories.npz"
 
 
+def new_output_folder(model: str) -> Path:
+    """A new folder named after the model in the current directory: NAME, else NAME-2, NAME-3, ...
+
+    Created here (atomically), so two runs started together never get the same one.
+    """
+    stem = Path(model).stem
+    for n in range(1, 10_000):
+        folder = Path(stem if n == 1 else f"{stem}-{n}")
+        try:
+            folder.mkdir()
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise click.ClickException(f"cannot create the output folder {folder.resolve()} ({exc.strerror})") from None
+        return folder
+    raise click.ClickException(f"{stem}, {stem}-2, ... {stem}-9999 all exist here; give --out")
+
+
+def output_folder(model: str, out: str | None) -> Path:
+    """``--out`` (created if missing), or a new folder named after the model (:func:`new_output_folder`)."""
+    if out is None:
+        return new_output_folder(model)
+    try:
+        Path(out).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise click.ClickException(f"cannot create the output folder {out} ({exc.strerror})") from None
+    return Path(out)
+
+
 @main.command("run")
 @click.argument("model", type=click.Path(exists=True, dir_okay=False), required=False)
 @click.option("--method", type=click.Choice(METHODS), help="Override the model file's method.")
 @click.option("--steps", type=click.IntRange(min=0), help="Override the number of steps.")
 @click.option("--out", "out", type=click.Path(file_okay=False), default=None,
-              help="Output folder (default: MODEL's name without suffix, beside it).")
+              help="Output folder (default: a new folder named after MODEL in the current directory: "
+                   "NAME, or NAME-2, NAME-3, ... if that exists).")
+@click.option("--overwrite", is_flag=True, help="Replace the results already in --out (else that is an error).")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 @click.option("--resume", "resume_file", type=click.Path(exists=True, dir_okay=False), default=None,
               help="Continue the run of a results.h5 from its last flush (instead of MODEL).")
 @click.option("--flush-every", type=click.IntRange(min=1), default=100, show_default=True,
               help="Recorded steps between flushes of results.h5 (what a killed run can lose).")
-def run_command(model: str | None, method: str | None, steps: int | None, out: str | None, quiet: bool,
-                resume_file: str | None, flush_every: int) -> None:
+def run_command(model: str | None, method: str | None, steps: int | None, out: str | None, overwrite: bool,
+                quiet: bool, resume_file: str | None, flush_every: int) -> None:
     """Run a model file; write results.h5 (see srdda plot/animate/vtk) and its time histories."""
     if resume_file is not None:
         if model is not None:
@@ -95,14 +129,32 @@ def run_command(model: str | None, method: str | None, steps: int | None, out: s
         settings = _override(settings, "--method", method=method)
     if steps is not None:
         settings = _override(settings, "--steps", n_steps=steps)
-    out_dir = Path(out) if out else Path(model).with_suffix("")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    store = ResultsStore(out_dir / "results.h5", settings, flush_every=flush_every,
-                         model_text=Path(model).read_text(encoding="utf-8"))
-    with tqdm(total=settings.n_steps, disable=True if quiet else None, unit="step", desc=settings.method) as bar:
-        result = run(mdl, settings, progress=lambda _: bar.update(1), recorders=[store])
-    path = save_histories(result, out_dir)
-    click.echo(f"{result.status}: {len(result.step)} recorded steps written to {path}")
+    out_dir = output_folder(model, out)
+    store = ResultsStore(out_dir / "results.h5", settings, flush_every=flush_every, overwrite=overwrite,
+                         model_text=read_model_text(model))
+    try:
+        store.acquire()  # before the run starts: fail at once if the output is taken
+    except OutputExistsError as exc:
+        raise click.ClickException(f"{exc}; pass --overwrite to replace them, choose another --out, or (a run "
+                                   f"that did not finish) continue it with: srdda run --resume {store.path}") from None
+    except ResultsWriteError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"writing {store.path}")
+    try:
+        with tqdm(total=settings.n_steps, disable=True if quiet else None, unit="step",
+                  desc=settings.method) as bar:
+            result = run(mdl, settings, progress=lambda _: bar.update(1), recorders=[store])
+        path = save_histories(result, out_dir)
+    except ResultsWriteError as exc:
+        if exc.cut_short:  # HDF5 may crash in its exit handler after a flush that failed half-way: skip it
+            click.echo(f"Error: {exc}", err=True)
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(1)
+        raise click.ClickException(str(exc)) from None
+    except OSError as exc:
+        raise click.ClickException(f"cannot write the histories in {out_dir} ({exc.strerror})") from None
+    click.echo(f"{result.status}: {len(result.step)} recorded steps written to {store.path} and {path}")
     if not result.completed:
         sys.exit(3)
 

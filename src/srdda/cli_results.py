@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 from tqdm import tqdm
 
-from .io.results_store import ResultsFileError, StoredResult, read_results, resume
+from .io.results_store import ResultsFileError, ResultsWriteError, StoredResult, read_results, resume
 
 __all__ = ["plot_command", "animate_command", "vtk_command", "resume_run", "report_paper"]
 
@@ -27,17 +27,30 @@ def _read(path: str) -> StoredResult:
     return res
 
 
+def _writable(path: Path, folder: bool = False) -> Path:
+    """``path`` with its folder (``folder``: itself) created; one clear message if that cannot be done."""
+    try:
+        (path if folder else path.parent).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise click.ClickException(f"cannot write {path} ({exc.strerror})") from None
+    return path
+
+
 def resume_run(path: str, quiet: bool = False, flush_every: int | None = None) -> str:
     """Continue a results file's run to its last step (``srdda run --resume``); returns the final status."""
     try:
         stored = read_results(path)
-        last = int(stored.settings.n_steps)
-        done = int(stored.step[-1]) if len(stored.step) else 0
-        with tqdm(total=max(0, last - done), disable=True if quiet else None, unit="step",
+        steps = stored.histories.get("step", [])
+        if len(steps) == 0:
+            click.echo(f"{path}: the run stopped before its first flush; restarting it from the beginning", err=True)
+        done = int(steps[-1]) if len(steps) else 0
+        with tqdm(total=max(0, int(stored.settings.n_steps) - done), disable=True if quiet else None, unit="step",
                   desc=f"resume {stored.method}") as bar:
             result = resume(path, flush_every=flush_every, progress=lambda _: bar.update(1))
     except ResultsFileError as exc:
         raise click.UsageError(str(exc)) from None
+    except ResultsWriteError as exc:
+        raise click.ClickException(str(exc)) from None
     final = read_results(path)
     click.echo(f"{result.status}: {path} now holds steps {int(final.step[0])}..{int(final.step[-1])} "
                f"({len(final.step)} recorded)")
@@ -104,10 +117,13 @@ def plot_command(run: str, what: str, step: int | None, quantities: tuple[str, .
             figs = {q: plotting.fig_time_series(res, q) for q in quantities}
     except (KeyError, ValueError) as exc:
         raise click.UsageError(str(exc.args[0] if exc.args else exc)) from None
-    base = Path(out) if out else Path(res.path).with_name(f"{Path(res.path).stem}_{what}.png")
+    base = _writable(Path(out) if out else Path(res.path).with_name(f"{Path(res.path).stem}_{what}.png"))
     for name, fig in figs.items():
         path = base if len(figs) == 1 else base.with_name(f"{base.stem}_{name.replace('.', '_')}{base.suffix}")
-        fig.savefig(path, dpi=120)
+        try:
+            fig.savefig(path, dpi=120)
+        except OSError as exc:
+            raise click.ClickException(f"cannot write {path} ({exc.strerror})") from None
         click.echo(f"wrote {path}")
 
 
@@ -125,12 +141,15 @@ def animate_command(run: str, out: str, fps: int, frames: int, color: str) -> No
     if Path(out).suffix.lower() not in (".gif", ".mp4"):
         raise click.UsageError(f"-o/--out must end in .gif or .mp4, got {out!r}")
     res = _read(run)
+    _writable(Path(out))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             path = animate(res, out, fps=fps, max_frames=frames, color=None if color == "none" else color)
         except (KeyError, ValueError) as exc:
             raise click.UsageError(str(exc.args[0] if exc.args else exc)) from None
+        except OSError as exc:
+            raise click.ClickException(f"cannot write {out} ({exc.strerror})") from None
     for w in caught:
         click.echo(f"warning: {w.message}", err=True)
     click.echo(f"wrote {path}")
@@ -145,6 +164,11 @@ def vtk_command(run: str, out: str, every: int) -> None:
     """Write ParaView files (VTU per step, PVD series) of a results file RUN."""
     from .io.vtk import write_vtu_series
 
-    pvds = write_vtu_series(_read(run), out, every=every)
+    res = _read(run)
+    _writable(Path(out), folder=True)
+    try:
+        pvds = write_vtu_series(res, out, every=every)
+    except OSError as exc:
+        raise click.ClickException(f"cannot write in {out} ({exc.strerror})") from None
     for path in pvds.values():
         click.echo(f"wrote {path}")

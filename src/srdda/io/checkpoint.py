@@ -11,7 +11,10 @@ this module knowing them:
   checkpoint; False for None) whose attr ``class`` names the dataclass;
 * ``step`` and ``time`` are appended last: a checkpoint counts only when every
   per-checkpoint dataset (``step``, ``time``, ``*__count``, ``*__present``)
-  has its row, so one cut short by a kill is ignored.
+  has its row, so one cut short by a kill is ignored. A writer may append
+  ``step`` separately (:func:`commit_checkpoint`), after the rest is on disk.
+  Steps increase from one checkpoint to the next; a row that breaks this (a
+  ``step`` write that failed) ends the complete checkpoints.
 
 ``moments`` is not stored: it is recomputed from the vertices, as the time
 loop does.
@@ -27,7 +30,8 @@ import numpy as np
 
 from ..geometry.polygon import BlockMoments
 
-__all__ = ["append_checkpoint", "checkpoint_count", "truncate_checkpoints", "read_checkpoint"]
+__all__ = ["append_checkpoint", "commit_checkpoint", "checkpoint_count", "increasing_prefix", "truncate_checkpoints",
+           "read_checkpoint"]
 
 SKIPPED = ("step", "time", "moments")
 
@@ -66,8 +70,11 @@ def _append_value(group: h5py.Group, name: str, value: Any) -> None:
     _append(group, f"{name}__count", np.array([1 if scalar else len(arr)], dtype=np.int64))
 
 
-def append_checkpoint(group: h5py.Group, state: Any) -> None:
-    """Append ``state`` (a State dataclass) as the next checkpoint of ``group``."""
+def append_checkpoint(group: h5py.Group, state: Any, commit: bool = True) -> None:
+    """Append ``state`` (a State dataclass) as the next checkpoint of ``group``.
+
+    ``commit=False`` leaves out its ``step`` row (:func:`commit_checkpoint`): until then it does not count.
+    """
     group.attrs["state_class"] = _class_path(state)
     for f in dataclasses.fields(state):
         if f.name in SKIPPED:
@@ -83,6 +90,12 @@ def append_checkpoint(group: h5py.Group, state: Any) -> None:
         else:
             _append_value(group, f.name, value)
     _append(group, "time", np.array([state.time], dtype=float))
+    if commit:
+        commit_checkpoint(group, state)
+
+
+def commit_checkpoint(group: h5py.Group, state: Any) -> None:
+    """Append the ``step`` row that makes the checkpoint of ``state`` count."""
     _append(group, "step", np.array([state.step], dtype=np.int64))
 
 
@@ -96,7 +109,14 @@ def checkpoint_count(group: h5py.Group) -> int:
     """Complete checkpoints in ``group``."""
     if "step" not in group:
         return 0
-    return min(group[k].shape[0] for k in _per_checkpoint(group))
+    n = min(group[k].shape[0] for k in _per_checkpoint(group))
+    return increasing_prefix(group["step"][:n])
+
+
+def increasing_prefix(steps: np.ndarray) -> int:
+    """Length of the leading run of strictly increasing ``steps`` (rows after a failed write are cut off)."""
+    broken = np.flatnonzero(np.diff(steps) <= 0)
+    return int(broken[0] + 1) if len(broken) else len(steps)
 
 
 def truncate_checkpoints(group: h5py.Group, n: int) -> None:

@@ -23,7 +23,8 @@ from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..settings import RunSettings
 from .schema import BlockSection, HistorySection, ModelFile
 
-__all__ = ["ModelFileError", "load_model", "model_from_dict", "save_model", "model_to_dict", "format_validation"]
+__all__ = ["ModelFileError", "load_model", "read_model_text", "model_from_dict", "save_model", "model_to_dict",
+           "format_validation"]
 
 
 class ModelFileError(ValueError):
@@ -218,17 +219,34 @@ def _links_dict(model: Model) -> dict[str, Any]:
     return out
 
 
+def read_model_text(path: str | Path) -> str:
+    """The text of a model file (UTF-8, a leading byte-order mark dropped); :class:`ModelFileError` if it is none."""
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise ModelFileError(f"{p}: cannot read the model file ({exc.strerror})") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise ModelFileError(f"{p}: not a UTF-8 text file (byte 0x{raw[exc.start]:02x} on line {line} is not UTF-8; "
+                             "a model file is TOML text saved as UTF-8)") from None
+    if "\x00" in text:
+        raise ModelFileError(f"{p}: not a text file (it holds NUL bytes; a model file is TOML text)")
+    return text
+
+
 def load_model(path: str | Path) -> tuple[Model, RunSettings]:
     """Read a TOML model file; raises :class:`ModelFileError` with a clear message."""
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelFileError(f"{p}: cannot read the model file ({exc.strerror})") from None
+    text = read_model_text(p)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ModelFileError(f"{p}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise ModelFileError(f"{p}: not valid TOML (arrays or tables nested too deeply)") from None
     return model_from_dict(data, str(p))
 
 

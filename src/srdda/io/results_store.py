@@ -24,18 +24,39 @@ Layout (see docs/results.md)::
                       (see :mod:`srdda.io.checkpoint`)
     /contacts/<name>  rows of all recorded contacts, ``offsets`` (k+1) and ``step`` (k)
 
-Every appended dataset only grows, so the extent stored at the last flush is
-always consistent; readers take the shortest extent of a group as its length.
+Every appended dataset only grows. A flush writes in three phases, each
+flushed to the file: the data rows (histories, contact rows, checkpoint
+fields), then the ``step`` rows that make them count (history, contacts), then
+the checkpoint's ``step``. Readers take the shortest extent of a group, cut
+where ``step`` stops increasing, as its length; so a flush cut short anywhere
+leaves exactly the earlier flushes visible, and a checkpoint only counts once
+every step up to it is on disk.
+
+Output safety (docs/reliability.md): a store holds its file from the first
+write (or :meth:`ResultsStore.acquire`) to :meth:`ResultsStore.finish` by an
+OS lock on ``<file>.lock`` taken before the HDF5 file is opened, which names
+the run holding it; it never truncates an existing file (a replaced file is
+unlinked first, so a reader keeps its copy); before each flush it checks that
+the disk has room for it and keeps ``<file>.reserve`` (room for one flush) to
+close the file cleanly when the disk is full. A failed write stops the run
+with one :class:`ResultsWriteError` saying which steps the file keeps.
 """
 from __future__ import annotations
 
 import dataclasses
 import datetime
+import errno
+import io
 import json
+import os
 import platform
+import shutil
+import socket
+import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import IO
 
 import h5py
 import numpy as np
@@ -47,11 +68,13 @@ from ..ledger import ENERGY_NAMES
 from ..results import Result, measured_points
 from ..settings import RunSettings
 from ..simulation import run
-from ..state import State
-from .checkpoint import append_checkpoint, checkpoint_count, read_checkpoint, truncate_checkpoints
+from ..state import State, initial_state
+from .checkpoint import (append_checkpoint, checkpoint_count, commit_checkpoint, increasing_prefix,
+                         read_checkpoint, truncate_checkpoints)
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state", "ResultsStore", "ResultsFileError", "StoredResult",
-           "read_results", "resume", "load_checkpoint", "model_arrays_from_file"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state", "ResultsStore", "ResultsFileError",
+           "ResultsWriteError", "OutputInUseError", "OutputExistsError", "StoredResult", "read_results", "resume",
+           "load_checkpoint", "model_arrays_from_file"]
 
 FORMAT = "srdda-results"
 FORMAT_VERSION = 1
@@ -97,6 +120,144 @@ class ResultsFileError(ValueError):
     """The file is not an srdda results file or lacks what is asked of it."""
 
 
+class ResultsWriteError(OSError):
+    """The results file cannot be written (folder not writable, disk full, ...); the message says what is kept.
+
+    ``cut_short``: a flush failed half-way, so HDF5 may crash when Python exits
+    (a program should end without running exit handlers: ``os._exit``).
+    """
+
+    cut_short: bool = False
+
+
+class OutputInUseError(ResultsWriteError):
+    """Another run is writing the results file; the message names it (pid, host, start time, command)."""
+
+
+class OutputExistsError(ResultsWriteError):
+    """The results file exists and the store was told not to replace it."""
+
+
+try:  # an advisory lock the OS drops when its holder dies, even by SIGKILL: no stale locks
+    import fcntl
+
+    def _try_lock(fh: IO[str]) -> bool:
+        try:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return False
+        return True
+except ImportError:  # Windows
+    import msvcrt
+
+    def _try_lock(fh: IO[str]) -> bool:
+        fh.seek(0)  # every run locks the same (first) byte
+        try:
+            msvcrt.locking(fh.fileno(), msvcrt.LK_NBLCK, 1)
+        except OSError:
+            return False
+        return True
+
+
+def _lock_path(path: Path) -> Path:
+    return path.with_name(path.name + ".lock")
+
+
+def _reserve_path(path: Path) -> Path:
+    return path.with_name(path.name + ".reserve")
+
+
+def _take_lock(path: Path) -> IO[str]:
+    """Hold ``<path>.lock`` (an OS lock) and write who holds it; raise :class:`OutputInUseError` if another run does."""
+    lock = _lock_path(path)
+    while True:
+        try:
+            fh = open(lock, "a+", encoding="utf-8")
+        except OSError as exc:
+            raise ResultsWriteError(f"{path}: cannot write in {path.parent} ({exc.strerror})") from None
+        try:
+            locked = _try_lock(fh)
+        except OSError as exc:  # a file system without locks (some network mounts)
+            fh.close()
+            raise ResultsWriteError(f"{path}: cannot lock {lock} ({exc.strerror}); write to a local disk") from None
+        if not locked:
+            fh.seek(0)
+            holder = fh.read().strip() or "a run that has not said who it is yet"
+            fh.close()
+            raise OutputInUseError(f"{path} is being written by another run ({holder}); wait for it to end or "
+                                   "write to another output")
+        try:  # the previous holder may have removed the lock file between our open and our lock: retry
+            if os.fstat(fh.fileno()).st_ino == os.stat(lock).st_ino:
+                break
+        except FileNotFoundError:
+            pass
+        fh.close()
+    started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    fh.seek(0)
+    fh.truncate()
+    fh.write(f"pid {os.getpid()} on {socket.gethostname()}, started {started}, command: {' '.join(sys.argv)}\n")
+    fh.flush()
+    return fh
+
+
+def _release_lock(path: Path, fh: IO[str]) -> None:
+    """Remove ``<path>.lock`` while still holding it, then drop the lock."""
+    try:
+        os.remove(_lock_path(path))
+    except OSError:
+        pass
+    fh.close()
+
+
+def _make_room(path: Path, reserve: int, need: int) -> None:
+    """Check that ``need`` bytes beyond the reserve are free; keep ``<path>.reserve`` at ``reserve`` bytes.
+
+    Where the OS can allocate disk blocks (posix_fallocate) the check allocates
+    them for real (so quotas count too) and gives them back for the flush;
+    elsewhere it reads the free space. Raises OSError (ENOSPC) if there is no room.
+    """
+    reserve_file = _reserve_path(path)
+    with open(reserve_file, "r+b" if reserve_file.exists() else "wb") as fh:
+        if hasattr(os, "posix_fallocate"):
+            os.posix_fallocate(fh.fileno(), 0, reserve + need)
+            fh.truncate(reserve)
+            return
+        fh.seek(0, os.SEEK_END)
+        block = bytes(1 << 20)
+        while fh.tell() < reserve:
+            fh.write(block[: reserve - fh.tell()])
+        fh.flush()
+        os.fsync(fh.fileno())
+    if shutil.disk_usage(path.parent).free < need:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+def _free_reserve(path: Path) -> None:
+    try:
+        os.remove(_reserve_path(path))
+    except OSError:
+        pass
+
+
+def _flush_bytes(rows: Mapping[str, list[np.ndarray]], state: State | None) -> int:
+    """An upper bound of the disk space one flush takes (see docs/reliability.md).
+
+    Each appended dataset may allocate a new chunk besides its rows (chunks hold
+    at most one flush of rows, or one checkpoint), hence the factor 2; contact
+    chunks (at most ~64 KiB each) and HDF5 metadata fit in the 2 MiB added.
+    """
+    history = sum(a.nbytes for arrays in rows.values() for a in arrays)
+    checkpoint = 0
+    if state is not None:
+        for f in dataclasses.fields(state):
+            value = getattr(state, f.name)
+            if isinstance(value, np.ndarray):
+                checkpoint += value.nbytes
+            elif dataclasses.is_dataclass(value):
+                checkpoint += sum(np.asarray(getattr(value, g.name)).nbytes for g in dataclasses.fields(value))
+    return 2 * (history + checkpoint) + (2 << 20)
+
+
 def _versions() -> dict[str, str]:
     import scipy
 
@@ -127,10 +288,15 @@ def _append(group: h5py.Group, name: str, rows: np.ndarray, chunk_rows: int) -> 
     ds[n:] = rows
 
 
-def _group_length(group: h5py.Group, names: Sequence[str] | None = None) -> int:
-    """Rows every dataset of ``group`` holds (the shortest extent)."""
-    keys = [k for k in (names or group.keys()) if k in group and isinstance(group[k], h5py.Dataset)]
-    return min((group[k].shape[0] for k in keys), default=0)
+def _group_length(group: h5py.Group) -> int:
+    """Rows every dataset of ``group`` holds: the shortest extent, cut where ``step`` stops increasing."""
+    n = min((ds.shape[0] for ds in group.values() if isinstance(ds, h5py.Dataset)), default=0)
+    return increasing_prefix(group["step"][:n]) if "step" in group else n
+
+
+def _contact_records(c: h5py.Group) -> int:
+    """Complete contact records: each needs its step and its closing offset."""
+    return increasing_prefix(c["step"][: min(len(c["step"]), len(c["offsets"]) - 1)])
 
 
 def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None) -> None:
@@ -191,6 +357,11 @@ def _open_read(path: str | Path) -> h5py.File:
     if f.attrs.get("format") != FORMAT:
         f.close()
         raise ResultsFileError(f"{path}: not an srdda results file (no format={FORMAT!r} attribute)")
+    missing = [g for g in ("settings", "model", "history", "checkpoint", "contacts") if g not in f]
+    if missing or "last_step" not in f.attrs:
+        f.close()
+        raise ResultsFileError(f"{path}: an incomplete results file (no {', '.join(missing) or 'last_step'}: the "
+                               "run was stopped while it created the file); run the model again")
     return f
 
 
@@ -203,6 +374,11 @@ class ResultsStore:
     the contact output (default: the contact set on ``state.contacts``),
     written at recorded steps that are multiples of ``contact_every``.
     ``model_text``: the model file's text, stored for provenance and re-runs.
+    ``overwrite``: replace an existing file (False: raise :class:`OutputExistsError`).
+
+    The store holds ``<path>.lock`` from :meth:`acquire` (called at the first
+    record if not before) to :meth:`finish`; a write that fails stops the run
+    with :class:`ResultsWriteError` and leaves the file resumable.
     """
 
     path: str | Path
@@ -212,7 +388,11 @@ class ResultsStore:
     contact_provider: ContactProvider | None = contacts_from_state
     contact_every: int = 1
     append: bool = False  # used by resume(): continue an existing file
+    overwrite: bool = True
     _file: h5py.File | None = field(default=None, init=False, repr=False)
+    _lock: IO[str] | None = field(default=None, init=False, repr=False)
+    _reserved: int = field(default=0, init=False, repr=False)  # bytes held by <path>.reserve
+    _flushed_step: int = field(default=-1, init=False, repr=False)  # step of the last complete checkpoint
     _buffer: dict[str, list[np.ndarray]] = field(default_factory=dict, init=False, repr=False)
     _contacts: dict[str, list[np.ndarray]] = field(default_factory=dict, init=False, repr=False)
     _contact_steps: list[int] = field(default_factory=list, init=False, repr=False)
@@ -222,6 +402,7 @@ class ResultsStore:
     _state: State | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
+        self.path = Path(self.path)
         if self.flush_every < 1:
             raise ValueError(f"flush_every must be >= 1, got {self.flush_every}")
         if self.contact_every < 1:
@@ -253,46 +434,150 @@ class ResultsStore:
             self.flush()
 
     def finish(self, status: str, state: State) -> None:
-        """Write what is buffered, a final checkpoint and the status; close the file."""
+        """Write what is buffered, a final checkpoint and the status; close the file and release it."""
         if self._file is None:
+            self.release()
             return
         self._state = state if state.step >= self._last_step else self._state
         self.flush()
-        self._file.attrs["status"] = status
-        self._file.close()
+        self._guarded(lambda: self._set_status_and_close(status))
+        self.release()
+
+    # -- holding the output -------------------------------------------------------
+    def acquire(self) -> None:
+        """Take the output's lock; refuse an existing file unless ``overwrite`` or ``append``.
+
+        Raises :class:`OutputInUseError` naming the run that holds it,
+        :class:`OutputExistsError`, or :class:`ResultsWriteError` (folder not writable).
+        """
+        if self._lock is not None:
+            return
+        self._lock = _take_lock(self.path)
+        if not self.append and not self.overwrite and self.path.exists():
+            self.release()
+            raise OutputExistsError(f"{self.path} exists: {_describe(self.path)}")
+
+    def release(self) -> None:
+        """Drop the output's lock (and the disk reserve); :meth:`finish` does it at the end of a run."""
+        if self._lock is not None:
+            _free_reserve(self.path)
+            _release_lock(self.path, self._lock)
+            self._lock = None
+            self._reserved = 0
+
+    def _set_status_and_close(self, status: str) -> None:
+        f = self._file
         self._file = None
+        f.attrs["status"] = status
+        f.close()
+
+    def _guarded(self, *writes: Callable[[], None], touches_file: bool = True) -> None:
+        """Run ``writes`` in order; on a failure stop, close the file keeping what is flushed, raise ResultsWriteError.
+
+        h5py reports a failed write as OSError or RuntimeError, or, when it
+        happens as an object is released, only to ``sys.unraisablehook`` and
+        stderr: those are collected here instead of printed (one traceback per
+        open object otherwise), and count as failures, checked after each write.
+        """
+        failures: list[BaseException] = []
+        hook, stderr = sys.unraisablehook, sys.stderr
+        sys.unraisablehook = lambda unraisable: failures.append(unraisable.exc_value)
+        sys.stderr = captured = io.StringIO()
+        try:
+            for write in writes:
+                write()
+                if failures:
+                    break
+        except (OSError, RuntimeError) as exc:
+            failures.insert(0, exc)
+        finally:
+            sys.unraisablehook, sys.stderr = hook, stderr
+        if failures:
+            self._abort(failures[0], touches_file)
+        stderr.write(captured.getvalue())  # what else the writes printed (a warning, say)
+
+    def _abort(self, exc: BaseException, cut_short: bool) -> None:
+        """Stop writing after a failed write (``cut_short``: it failed inside a flush of the HDF5 file)."""
+        _free_reserve(self.path)
+        f, self._file = self._file, None
+        if f is not None and not cut_short:  # the file is as the last flush left it: mark it and close it
+            try:
+                f.attrs["status"] = f"stopped: the results could not be written ({_reason(exc)})"
+                f.close()
+            except (OSError, RuntimeError):
+                cut_short = True
+        if f is not None and cut_short:
+            _detach(f)
+        self.release()
+        kept = (f"every step up to step {self._flushed_step}" if self._flushed_step >= 0
+                else "no step (it failed before its first flush)")
+        if f is not None and cut_short:
+            kept += " unless the interrupted flush damaged it"
+        advice = (f"free some space or fix the folder, then continue with: srdda run --resume {self.path}"
+                  if self._flushed_step >= 0 else "free some space or fix the folder, then run again")
+        error = ResultsWriteError(f"{self.path}: cannot write the results ({_reason(exc)}); the file keeps {kept}; "
+                                  f"{advice}")
+        error.cut_short = f is not None and cut_short
+        raise error from None
 
     # -- writing ------------------------------------------------------------------
     def flush(self) -> None:
         """Append the buffered steps and a checkpoint of the last state; flush the file."""
-        f = self._file
-        if f is None:
+        if self._file is None:
             return
-        hist = f["history"]
-        for name, rows in self._buffer.items():
-            if rows:
-                _append(hist, name, np.stack(rows), self.flush_every)
-        self._buffer = {}
-        hist["energy"].attrs["names"] = json.dumps(ENERGY_NAMES)
-        if self._contact_steps:
-            g = f["contacts"]
-            counts = self._contact_counts
-            start = int(g["offsets"][-1]) if "offsets" in g and len(g["offsets"]) else 0
-            if "offsets" not in g:
-                _append(g, "offsets", np.zeros(1, dtype=np.int64), 1024)
-            for name, rows in self._contacts.items():
-                if rows:
-                    _append(g, name, np.concatenate(rows), 4096)
-            _append(g, "step", np.array(self._contact_steps, dtype=np.int64), 1024)
-            _append(g, "offsets", start + np.cumsum(counts, dtype=np.int64), 1024)
-            self._contacts, self._contact_steps, self._contact_counts = {}, [], []
-        if self._state is not None:
-            cp = f["checkpoint"]
-            n = checkpoint_count(cp)
-            if n == 0 or cp["step"][n - 1] != self._state.step:
-                append_checkpoint(cp, self._state)
+        need = _flush_bytes(self._buffer, self._state)
+        self._reserved = max(self._reserved, need)
+        # a full disk fails here, before the file is touched; the reserve is there to close it cleanly
+        self._guarded(lambda: _make_room(self.path, self._reserved, need), touches_file=False)
+        self._write_buffered()
         self._pending = 0
-        f.flush()
+        if self._state is not None:
+            self._flushed_step = self._state.step
+
+    def _write_buffered(self) -> None:
+        """Three phases, each flushed: the data; the step rows that make them count; the checkpoint's step.
+
+        A write that fails in a phase stops the flush there, leaving what the
+        earlier phases made count: readers and resume see exactly the flushed
+        steps, and a checkpoint only once every step up to it is on disk.
+        """
+        f = self._file
+        hist, contacts, cp = f["history"], f["contacts"], f["checkpoint"]
+        n_cp = checkpoint_count(cp)
+        new_checkpoint = self._state is not None and (n_cp == 0 or cp["step"][n_cp - 1] != self._state.step)
+
+        def data() -> None:
+            for name, rows in self._buffer.items():
+                if rows and name != "step":
+                    _append(hist, name, np.stack(rows), self.flush_every)
+            hist["energy"].attrs["names"] = json.dumps(ENERGY_NAMES)
+            if self._contact_steps:
+                if "offsets" not in contacts:
+                    _append(contacts, "offsets", np.zeros(1, dtype=np.int64), 1024)
+                for name, rows in self._contacts.items():
+                    if rows:
+                        _append(contacts, name, np.concatenate(rows), 4096)
+            if new_checkpoint:
+                append_checkpoint(cp, self._state, commit=False)
+            f.flush()
+
+        def steps() -> None:
+            if self._buffer.get("step"):
+                _append(hist, "step", np.stack(self._buffer["step"]), self.flush_every)
+            if self._contact_steps:
+                start = int(contacts["offsets"][-1])
+                _append(contacts, "step", np.array(self._contact_steps, dtype=np.int64), 1024)
+                _append(contacts, "offsets", start + np.cumsum(self._contact_counts, dtype=np.int64), 1024)
+            f.flush()
+
+        def checkpoint() -> None:
+            if new_checkpoint:
+                commit_checkpoint(cp, self._state)
+                f.flush()
+
+        self._guarded(data, steps, checkpoint)
+        self._buffer = {}
+        self._contacts, self._contact_steps, self._contact_counts = {}, [], []
 
     def _record_contacts(self, arrays: ModelArrays, state: State) -> None:
         given = self.contact_provider(arrays, state)  # type: ignore[misc]
@@ -308,14 +593,24 @@ class ResultsStore:
         self._contact_steps.append(state.step)
 
     def _open(self, arrays: ModelArrays, state: State) -> None:
+        self.acquire()
+        self._reserved = _flush_bytes({}, state)
+        self._guarded(lambda: _make_room(self.path, self._reserved, self._reserved), touches_file=False)
+        self._guarded(lambda: self._open_file(arrays, state))
+
+    def _open_file(self, arrays: ModelArrays, state: State) -> None:
         if self.append:
             self._file = h5py.File(self.path, "a")
             self._last_step = _truncate_to_checkpoint(self._file)
+            self._flushed_step = self._last_step
             self._file.attrs["status"] = "running"
             return
-        f = h5py.File(self.path, "w")
+        if self.path.exists():  # unlink, never truncate: a reader of the old file keeps its copy
+            self.path.unlink()
+        f = self._file = h5py.File(self.path, "w-")
         f.attrs.update({"format": FORMAT, "format_version": FORMAT_VERSION, "method": self.settings.method,
-                        "status": "running", "last_step": state.step + self.settings.n_steps,
+                        "status": "running",  # last_step -1: the run goes to its end_time, not a step count
+                        "last_step": -1 if self.settings.n_steps is None else state.step + self.settings.n_steps,
                         "flush_every": self.flush_every, "contact_every": self.contact_every,
                         "created": datetime.datetime.now(datetime.timezone.utc).isoformat()})
         from .. import __version__
@@ -328,16 +623,66 @@ class ResultsStore:
         f.create_group("checkpoint")
         f.create_group("contacts")
         f.flush()
-        self._file = f
+
+
+def _reason(exc: BaseException) -> str:
+    """The OS's words for a failed write (h5py buries them in a long message)."""
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
+    text = str(exc)
+    marker = "error message = '"
+    if marker in text:
+        return text.split(marker, 1)[1].split("'", 1)[0]
+    return text.splitlines()[0] if text else type(exc).__name__
+
+
+def _detach(f: h5py.File) -> None:
+    """Close a file whose flush failed without writing to it again.
+
+    HDF5 would retry the failed writes on close with metadata it could not
+    keep consistent (in tests that retry damaged the flushed steps): the file's
+    descriptor is pointed at the null device first, so the file keeps what the
+    OS took before the failure; h5py's complaints while it closes are not
+    printed. HDF5 may still hold objects of the file whose release failed and
+    crash when it shuts down at exit (see docs/reliability.md).
+    """
+    hook, stderr = sys.unraisablehook, sys.stderr
+    sys.unraisablehook, sys.stderr = (lambda _: None), io.StringIO()
+    try:
+        null = os.open(os.devnull, os.O_RDWR)
+        os.dup2(null, f.id.get_vfd_handle())
+        os.close(null)
+        f.close()
+    except (OSError, ValueError, RuntimeError):
+        pass
+    finally:
+        sys.unraisablehook, sys.stderr = hook, stderr
+
+
+def _describe(path: Path) -> str:
+    """What a results file holds, for messages: its status and when it was created."""
+    try:
+        with h5py.File(path, "r") as f:
+            return (f"the results of a run (status {str(f.attrs.get('status', '?'))!r}, created "
+                    f"{str(f.attrs.get('created', '?'))})")
+    except OSError:
+        return "a file that is not an srdda results file"
 
 
 def _truncate_to_checkpoint(f: h5py.File) -> int:
-    """Cut every appended dataset back to the last complete checkpoint; return its step."""
+    """Cut every appended dataset back to the last complete checkpoint; return its step.
+
+    Without a complete checkpoint (a run stopped before its first flush) every
+    dataset is emptied and -1 returned: the run restarts from its initial state.
+    """
     cp = f["checkpoint"]
     n_cp = checkpoint_count(cp)
-    if n_cp == 0:
-        raise ResultsFileError(f"{f.filename}: no checkpoint was flushed; nothing to resume from")
     truncate_checkpoints(cp, n_cp)
+    if n_cp == 0:
+        for group in (f["history"], f["contacts"]):
+            for name in list(group):
+                del group[name]
+        return -1
     step = int(cp["step"][n_cp - 1])
     hist = f["history"]
     n = _group_length(hist)
@@ -346,8 +691,7 @@ def _truncate_to_checkpoint(f: h5py.File) -> int:
         ds.resize(keep, axis=0)
     c = f["contacts"]
     if "step" in c:
-        k = min(len(c["step"]), len(c["offsets"]) - 1)
-        k = int(np.searchsorted(c["step"][:k], step, side="right"))
+        k = int(np.searchsorted(c["step"][:_contact_records(c)], step, side="right"))
         rows = int(c["offsets"][k])
         for name, ds in c.items():
             ds.resize({"step": k, "offsets": k + 1}.get(name, rows), axis=0)
@@ -413,7 +757,7 @@ def read_results(path: str | Path) -> StoredResult:
         c = f["contacts"]
         contacts: dict[str, np.ndarray] = {}
         if "step" in c:
-            k = min(len(c["step"]), len(c["offsets"]) - 1)
+            k = _contact_records(c)
             rows = int(c["offsets"][k])
             contacts = {name: ds[:k] if name == "step" else ds[:k + 1] if name == "offsets" else ds[:rows]
                         for name, ds in c.items()}
@@ -465,6 +809,8 @@ def resume(path: str | Path, model: Model | ModelArrays | None = None, flush_eve
            ) -> Result:
     """Continue the run of a results file from its last checkpoint up to its last step, appending to it.
 
+    A file without a checkpoint (a run stopped before its first flush) restarts from the initial state.
+
     The model comes from the file unless given: its stored arrays, or, when it
     has loads given as Python functions, the stored model file text (a model
     built in Python with such loads must be given). Returns the :class:`Result` of the continued
@@ -476,8 +822,10 @@ def resume(path: str | Path, model: Model | ModelArrays | None = None, flush_eve
         last_step = int(f.attrs["last_step"])
         stored_flush = int(f.attrs["flush_every"])
         contact_every = int(f.attrs["contact_every"])
-    state = load_checkpoint(path, arrays)
-    remaining = dataclasses.replace(settings, n_steps=max(0, last_step - state.step))
+        flushed = checkpoint_count(f["checkpoint"]) > 0
+    # a run stopped before its first flush restarts from its initial state
+    state = load_checkpoint(path, arrays) if flushed else initial_state(arrays, settings.resolved_method())
+    remaining = settings if last_step < 0 else dataclasses.replace(settings, n_steps=max(0, last_step - state.step))
     store = ResultsStore(path, remaining, flush_every=flush_every or stored_flush, append=True,
                          contact_provider=contact_provider, contact_every=contact_every)
     return run(arrays, remaining, progress=progress, state=state, recorders=[store], keep_history=False)
