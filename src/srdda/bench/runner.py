@@ -10,7 +10,9 @@ functions of the engine with timers; nothing is patched in the parent):
 
 * ``steps``: accepted steps within the step count and the wall-time limit;
   ``steps_per_s`` = accepted steps / wall time of ``srdda.run`` (model
-  building and numba compilation excluded);
+  building and numba compilation excluded); ``steps_per_cpu_s`` divides by the
+  process's CPU time instead, which other processes on a busy machine distort
+  less (on an idle machine the two agree while the run uses one core);
 * ``solves_per_step``: mean solves per accepted step (what ``Result.iterations``
   holds); ``solves_total`` also counts the solves of rejected attempts;
 * ``rejected_steps``: step attempts that raised ``StepRejected`` (open-close
@@ -182,14 +184,14 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
     probe = Probe(deadline=start + timeout)
     probe.install()
     note = ""
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     try:
         status = simulation.run(arrays, settings).status
     except WallTimeLimit:
         status = "time limit"
         note = (f"wall-time limit {timeout:g} s reached after {len(probe.accepted_solves)} accepted steps "
                 f"and {probe.attempts} attempts")
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
     if status not in ("completed", "time limit"):
         note = status
     n = len(probe.accepted_solves)
@@ -202,7 +204,8 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
         "steps_requested": steps, "attempts": probe.attempts, "solves_total": probe.solves,
         "mean_accepted_dt": float(np.mean(probe.accepted_dt)) if n else None,
         "contacts_per_attempt": float(np.mean(probe.contacts)) if probe.contacts else 0.0,
-        "wall_s": wall, "build_s": build_s, "status": status, "note": note,
+        "wall_s": wall, "cpu_s": cpu, "steps_per_cpu_s": n / cpu if cpu > 0 else 0.0, "build_s": build_s,
+        "status": status, "note": note,
     }
     for phase in PHASES:
         row[f"share_{phase}"] = probe.seconds[phase] / wall if wall > 0 else 0.0
