@@ -73,9 +73,11 @@ def test_brick_wall_counts_area_and_bond(nx: int, ny: int) -> None:
     assert model.materials["brick"].young == 5e9 and model.materials["brick"].poisson == 0.2
 
 
-def test_brick_wall_rejects_empty() -> None:
+def test_bad_model_parameters_are_named() -> None:
     with pytest.raises(ValueError, match="nx >= 1"):
         brick_wall(0, 3)
+    with pytest.raises(ValueError, match="unknown slope 'z'"):
+        jointed_slope("z")
 
 
 def test_bench_quick_json_rows() -> None:
