@@ -1,7 +1,12 @@
-"""Run every benchmark script in this folder (``make bench``)."""
+"""Run every benchmark script in this folder and ``srdda bench --quick`` (``make bench``).
+
+The full set of standard models (issue 14: slopes, brick walls) is ``srdda bench``.
+"""
 import pathlib
 import runpy
 import sys
+
+from srdda.bench.runner import QUICK, format_table, run_cases
 
 here = pathlib.Path(__file__).parent
 failed = []
@@ -13,4 +18,9 @@ for script in sorted(here.glob("bench_*.py")):
     except Exception as exc:  # report and go on with the other benchmarks
         print(f"{script.name} failed: {exc!r}", flush=True)
         failed.append(script.name)
+print("== srdda bench --quick ==", flush=True)
+rows = run_cases(list(QUICK), None, True, "dda0", None, 900.0)
+print(format_table(rows), flush=True)
+if any(r["status"] != "completed" for r in rows):
+    failed.append("srdda bench --quick")
 sys.exit(1 if failed else 0)

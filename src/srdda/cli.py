@@ -289,6 +289,30 @@ def verify_command(cases: tuple[str, ...], as_json: bool, quick: bool) -> None:
         sys.exit(1)
 
 
+@main.command("bench")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON document {\"rows\": [...]} instead of a table.")
+@click.option("--quick", is_flag=True, help="The small models only (slope a, b), few steps: under a minute.")
+@click.option("--model", "models", multiple=True, help="Run this standard model (repeatable; default: all).")
+@click.option("--steps", type=click.IntRange(min=0), default=None, help="Steps per model (default: the model's).")
+@click.option("--dt", type=click.FloatRange(min=0, min_open=True), default=None,
+              help="Time step (s) for every model (default: the model's).")
+@click.option("--method", type=click.Choice(METHODS), default="dda0", show_default=True)
+@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=900.0, show_default=True,
+              help="Wall-time limit per model (s); a model that reaches it is reported with the steps it made.")
+def bench_command(as_json: bool, quick: bool, models: tuple[str, ...], steps: int | None, dt: float | None,
+                  method: str, timeout: float) -> None:
+    """Time the standard benchmark models (issue 14), each in a fresh process: steps/s, solves, memory."""
+    from .bench.runner import CASES, QUICK, format_table, run_cases
+
+    unknown = [m for m in models if m not in CASES]
+    if unknown:
+        raise click.UsageError(f"unknown model(s) {', '.join(unknown)}; choose from {', '.join(CASES)}")
+    names = list(models) or list(QUICK if quick else CASES)
+    rows = run_cases(names, steps, quick, method, dt, timeout,
+                     progress=None if as_json else lambda name: click.echo(f"running {name} ...", err=True))
+    click.echo(json.dumps({"rows": rows}, indent=1) if as_json else format_table(rows))
+
+
 main.add_command(plot_command)
 main.add_command(animate_command)
 main.add_command(vtk_command)

@@ -155,17 +155,19 @@ class ContactStep:
         # open one and letting a locked one slip are never held back: they keep forces bounded
         # and store no spurious energy.
         # (never frozen LOCKED against a slip: a locked spring past its strength would keep
-        # loading from step to step; never frozen SLIDING against a reversed slip: its friction
-        # would push the block the way it moves, creating energy)
+        # loading from step to step)
         # After ``settle_after`` solves every contact is held so, to settle cascades in large systems.
         band = 1e-6 * p.distance  # clearly open or penetrating, not by rounding at a zero gap
-        reversed_slip = (self.state == SLIDING) & (state == LOCKED) & (np.sign(self.shear) == -self.sign)
         safe = (((self.state == LOCKED) & (state == SLIDING)) | ((self.state == OPEN) & (self.gap < -band))
-                | ((self.state != OPEN) & (state == OPEN) & (self.gap > band)) | reversed_slip)
+                | ((self.state != OPEN) & (state == OPEN) & (self.gap > band)))
         limit = 0 if self.iterations >= p.settle_after else p.freeze_after
         frozen = (self.flips >= limit) & (state != self.state) & ~safe
+        # a contact held SLIDING whose slip reversed would have its friction push the block the way it
+        # moves (creating energy): it keeps sliding with no friction, a force inside the friction cone
+        reversed_slip = frozen & (self.state == SLIDING) & (np.sign(self.shear) == -self.sign)
         state = np.where(frozen, self.state, state).astype(np.int8)
-        sign = np.where(frozen, self.sign, sign).astype(np.int8)
+        sign = np.where(frozen & ~reversed_slip, self.sign, sign).astype(np.int8)
+        sign = np.where(reversed_slip, 0, sign).astype(np.int8)
         changed = np.where(frozen, False, changed)
         if self.iterations < p.settle_after:  # then friction forces are taken as they are
             changed = changed | unsettled

@@ -1,0 +1,1 @@
+"""Benchmarks shipped with srdda: the standard models (:mod:`.models`) and ``srdda bench`` (:mod:`.runner`)."""

@@ -1,0 +1,284 @@
+"""``srdda bench``: run the standard models for a fixed number of steps and time them.
+
+Each model runs in a fresh Python process (``python -m srdda.bench.runner``),
+so that its peak memory (``ru_maxrss`` of that process) is its own and one
+model's numba compilation, caches or leaks do not bias the next. The child
+prints one JSON row; the parent collects the rows and prints them.
+
+What a row measures, without changing the engine (the child wraps a few
+functions of the engine with timers; nothing is patched in the parent):
+
+* ``steps``: accepted steps within the step count and the wall-time limit;
+  ``steps_per_s`` = accepted steps / wall time of ``srdda.run`` (model
+  building and numba compilation excluded); ``steps_per_cpu_s`` divides by the
+  process's CPU time instead, which other processes on a busy machine distort
+  less (on an idle machine the two agree while the run uses one core);
+* ``solves_per_step``: mean solves per accepted step (what ``Result.iterations``
+  holds); ``solves_total`` also counts the solves of rejected attempts;
+* ``rejected_steps``: step attempts whose outcome was a cut (open-close cap,
+  displacement or penetration check), counted by a wrapper around
+  ``Stepper.step``;
+* ``share_*``: the part of the run's wall time spent (exclusively, nested timed
+  calls subtracted) in contact detection (``ContactModel.prepare``), assembly
+  (``Stepper.assemble`` and ``base_system``: every term's ``add_to``, and
+  ``BlockSystem`` to sparse/dense), the linear solve (the solver's ``solve``
+  minus the assembly it calls) and the open-close bookkeeping
+  (``ContactStep.converged``/``commit``); ``share_other`` is the rest (the
+  kinematic update, recording).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from .. import simulation
+from ..assembly.system import BlockSystem
+from ..contact.term import ContactModel, ContactStep
+from ..model import Model
+from ..settings import RunSettings
+from ..step import Stepper
+from .models import brick_wall, jointed_slope
+
+__all__ = ["BenchCase", "CASES", "QUICK", "REQUIRED_KEYS", "run_cases", "format_table"]
+
+REQUIRED_KEYS = ("model", "dim", "blocks", "method", "steps", "dt", "sim_time", "steps_per_s", "solves_per_step",
+                 "rejected_steps", "peak_mb")
+PHASES = ("detection", "assembly", "solve", "open_close")
+
+
+@dataclass(frozen=True)
+class BenchCase:
+    """A standard model: how to build it (model and its run settings) and how many steps to run."""
+
+    name: str
+    dim: int
+    build: Callable[[], tuple[Model, RunSettings]]
+    steps: int
+    quick_steps: int
+
+
+CASES = {c.name: c for c in (
+    BenchCase("slope_a", 2, lambda: jointed_slope("a"), 200, 20),
+    BenchCase("slope_b", 2, lambda: jointed_slope("b"), 200, 20),
+    BenchCase("slope_c", 2, lambda: jointed_slope("c"), 200, 20),
+    BenchCase("wall_10k", 2, lambda: brick_wall(100, 100), 5, 1),
+    BenchCase("wall_100k", 2, lambda: brick_wall(316, 316), 3, 1),
+)}
+QUICK = ("slope_a", "slope_b")
+
+
+class WallTimeLimit(Exception):
+    """The model's wall-time limit was reached (not a RuntimeError: the engine must not catch it)."""
+
+
+class Probe:
+    """Timers and counters wrapped around engine functions, in the child process only."""
+
+    def __init__(self, deadline: float) -> None:
+        self.deadline = deadline
+        self.seconds = dict.fromkeys(PHASES, 0.0)
+        self._stack: list[list[float]] = []  # [start, time of nested timed calls]
+        self.attempts = 0
+        self.rejected = 0
+        self.accepted_solves: list[int] = []
+        self.accepted_dt: list[float] = []
+        self.sim_time = 0.0
+        self.solves = 0
+        self.contacts: list[int] = []
+
+    def timed(self, phase: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+        """``fn`` with its exclusive wall time added to ``phase``."""
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            frame = [time.perf_counter(), 0.0]
+            self._stack.append(frame)
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                elapsed = time.perf_counter() - frame[0]
+                self._stack.pop()
+                self.seconds[phase] += elapsed - frame[1]
+                if self._stack:
+                    self._stack[-1][1] += elapsed
+        return wrapper
+
+    def install(self) -> None:
+        """Wrap the engine's functions (class attributes and module globals of this process)."""
+        probe = self
+        step = Stepper.step
+
+        def counted_step(stepper: Stepper, state: Any, dt: float) -> Any:
+            if time.perf_counter() > probe.deadline:
+                raise WallTimeLimit
+            probe.attempts += 1
+            outcome = step(stepper, state, dt)
+            if outcome.status == "cut":
+                probe.rejected += 1
+            elif outcome.status == "accepted":
+                probe.accepted_solves.append(outcome.solves)
+                probe.accepted_dt.append(outcome.state.time - state.time)
+                probe.sim_time = outcome.state.time
+            return outcome
+
+        prepare = ContactModel.prepare
+
+        def counted_prepare(model: Any, *args: Any) -> Any:
+            term = prepare(model, *args)
+            probe.contacts.append(0 if term is None else len(term))
+            return term
+
+        get_solver = simulation.get_solver
+
+        def timed_solver(name: str = "auto") -> Any:
+            return _TimedSolver(get_solver(name), probe)
+
+        Stepper.step = counted_step  # type: ignore[method-assign]
+        ContactModel.prepare = self.timed("detection", counted_prepare)  # type: ignore[method-assign]
+        simulation.get_solver = timed_solver  # type: ignore[assignment]
+        Stepper.assemble = self.timed("assembly", Stepper.assemble)  # type: ignore[method-assign]
+        Stepper.base_system = self.timed("assembly", Stepper.base_system)  # type: ignore[method-assign]
+        for name in ("to_bsr", "to_csr", "to_dense", "saddle_csr", "saddle_dense"):
+            setattr(BlockSystem, name, self.timed("assembly", getattr(BlockSystem, name)))
+        ContactStep.converged = self.timed("open_close", ContactStep.converged)  # type: ignore[method-assign]
+        ContactStep.commit = self.timed("open_close", ContactStep.commit)  # type: ignore[method-assign]
+
+
+class _TimedSolver:
+    """A linear solver whose solves are counted, timed and stopped at the wall-time limit."""
+
+    def __init__(self, inner: Any, probe: Probe) -> None:
+        self.name = inner.name
+        self._probe = probe
+        self._solve = probe.timed("solve", inner.solve)
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        if time.perf_counter() > self._probe.deadline:
+            raise WallTimeLimit
+        self._probe.solves += 1
+        return self._solve(system, rhs)
+
+
+def _warm_up() -> None:
+    """Compile the numba kernels (contact detection) on a tiny wall, outside the timing."""
+    model, settings = brick_wall(2, 2)
+    simulation.run(model, replace(settings, n_steps=2))
+
+
+def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout: float) -> dict[str, Any]:
+    """Build and run one model in this process; the row of ``srdda bench --json``."""
+    start = time.perf_counter()
+    _warm_up()
+    t0 = time.perf_counter()
+    model, settings = case.build()
+    arrays = model.arrays()
+    build_s = time.perf_counter() - t0
+    settings = replace(settings, n_steps=steps, method=method, dt=settings.dt if dt is None else dt,
+                       record_every=max(steps, 1))
+    probe = Probe(deadline=start + timeout)
+    probe.install()
+    note = ""
+    t0, cpu0 = time.perf_counter(), time.process_time()
+    try:
+        status = simulation.run(arrays, settings).status
+    except WallTimeLimit:
+        status = "time limit"
+        note = (f"wall-time limit {timeout:g} s reached after {len(probe.accepted_solves)} accepted steps "
+                f"and {probe.attempts} attempts")
+    wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    if status not in ("completed", "time limit"):
+        note = status
+    n = len(probe.accepted_solves)
+    row: dict[str, Any] = {
+        "model": case.name, "dim": case.dim, "blocks": arrays.n_blocks, "method": settings.method, "steps": n,
+        "dt": settings.dt, "sim_time": probe.sim_time, "steps_per_s": n / wall if wall > 0 else 0.0,
+        "solves_per_step": float(np.mean(probe.accepted_solves)) if n else None,
+        "rejected_steps": probe.rejected,
+        "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,  # Linux: kB
+        "steps_requested": steps, "attempts": probe.attempts, "solves_total": probe.solves,
+        "mean_accepted_dt": float(np.mean(probe.accepted_dt)) if n else None,
+        "contacts_per_attempt": float(np.mean(probe.contacts)) if probe.contacts else 0.0,
+        "wall_s": wall, "cpu_s": cpu, "steps_per_cpu_s": n / cpu if cpu > 0 else 0.0, "build_s": build_s,
+        "status": status, "note": note,
+    }
+    for phase in PHASES:
+        row[f"share_{phase}"] = probe.seconds[phase] / wall if wall > 0 else 0.0
+    row["share_other"] = max(0.0, 1.0 - sum(row[f"share_{p}"] for p in PHASES))
+    return row
+
+
+def _failed_row(case: BenchCase, steps: int, method: str, dt: float | None, note: str) -> dict[str, Any]:
+    return {"model": case.name, "dim": case.dim, "blocks": None, "method": method, "steps": 0, "dt": dt,
+            "sim_time": 0.0, "steps_per_s": 0.0, "solves_per_step": None, "rejected_steps": None,
+            "peak_mb": None, "steps_requested": steps, "status": "failed", "note": note}
+
+
+def run_cases(names: list[str], steps: int | None, quick: bool, method: str, dt: float | None,
+              timeout: float, progress: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
+    """Run each named case in its own child process; one row per case, in order."""
+    rows = []
+    for name in names:
+        case = CASES[name]
+        n = steps if steps is not None else (case.quick_steps if quick else case.steps)
+        if progress is not None:
+            progress(name)
+        cmd = [sys.executable, "-m", "srdda.bench.runner", name, "--steps", str(n), "--method", method,
+               "--timeout", str(timeout)] + ([] if dt is None else ["--dt", repr(dt)])
+        try:
+            # the child stops itself at the limit (between solves); this margin covers one long solve
+            done = subprocess.run(cmd, capture_output=True, text=True, timeout=2.0 * timeout + 120.0)
+        except subprocess.TimeoutExpired:
+            rows.append(_failed_row(case, n, method, dt, f"killed: no answer within {2.0 * timeout + 120.0:g} s"))
+            continue
+        lines = done.stdout.strip().splitlines()
+        if done.returncode != 0 or not lines:
+            err = done.stderr.strip().splitlines()
+            rows.append(_failed_row(case, n, method, dt,
+                                    f"child exited with {done.returncode}: {err[-1] if err else 'no message'}"))
+            continue
+        rows.append(json.loads(lines[-1]))
+    return rows
+
+
+def _num(x: Any, fmt: str) -> str:
+    return "-" if x is None else format(x, fmt)
+
+
+def format_table(rows: list[dict[str, Any]]) -> str:
+    """The rows as an aligned text table (time shares in %)."""
+    header = ("model", "blocks", "method", "steps", "dt", "sim time", "steps/s", "solves/step", "rejected",
+              "detect%", "assembly%", "solve%", "open-close%", "other%", "peak MB", "note")
+    lines = [header]
+    for r in rows:
+        shares = [_num(None if f"share_{p}" not in r else 100 * r[f"share_{p}"], ".0f")
+                  for p in (*PHASES, "other")]
+        lines.append((r["model"], _num(r["blocks"], "d"), r["method"], f"{r['steps']}/{r.get('steps_requested', '-')}",
+                      _num(r["dt"], "g"), _num(r["sim_time"], ".4g"), _num(r["steps_per_s"], ".3g"),
+                      _num(r["solves_per_step"], ".1f"), _num(r["rejected_steps"], "d"), *shares,
+                      _num(r["peak_mb"], ".0f"), r.get("note", "")))
+    widths = [max(len(str(line[i])) for line in lines) for i in range(len(header))]
+    return "\n".join("  ".join(str(c).ljust(w) for c, w in zip(line, widths)).rstrip() for line in lines)
+
+
+def _main() -> None:
+    """Child process: measure one case and print its row as one JSON line."""
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("model", choices=sorted(CASES))
+    ap.add_argument("--steps", type=int, required=True)
+    ap.add_argument("--method", default="dda0")
+    ap.add_argument("--dt", type=float, default=None)
+    ap.add_argument("--timeout", type=float, required=True)
+    args = ap.parse_args()
+    row = measure(CASES[args.model], args.steps, args.method, args.dt, args.timeout)
+    print(json.dumps(row), flush=True)
+
+
+if __name__ == "__main__":
+    _main()
