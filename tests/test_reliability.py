@@ -272,3 +272,13 @@ def test_output_folders_of_plot_animate_vtk(small_run: Path, tmp_path: Path, com
     bad = CliRunner().invoke(main, [command, str(small_run), "-o", str(blocker / target), *extra])
     out = _one_message(bad, 1)
     assert "cannot write" in out and str(blocker) in out
+
+
+def test_a_hinge_point_outside_its_named_blocks_is_an_error():
+    m = srdda.Model()
+    m.add_material("rock", srdda.Material(2500.0, 1e9, 0.25))
+    a = m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+    b = m.add_block([[1, 0], [2, 0], [2, 1], [1, 1]], "rock")
+    with pytest.raises(srdda.ModelError, match=r"hinge 0: point \(5.0, 0.5\) lies outside block 'block 0'"):
+        m.add_hinge((5.0, 0.5), block_a=a, block_b=b)
+    assert m.add_hinge((1.0, 0.5), block_a=a, block_b=b) == 0  # on the shared edge: in both blocks

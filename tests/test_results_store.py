@@ -253,3 +253,17 @@ def test_sigkill_at_20_random_steps_then_resume_equals_the_uninterrupted_run_bit
         final = load_checkpoint(path, rod_model().arrays())
         for name in STATE_FIELDS:
             np.testing.assert_array_equal(getattr(final, name), getattr(reference.final_state, name), err_msg=name)
+
+
+def test_a_streamed_run_keeps_two_rows_in_memory_and_every_row_in_the_file(tmp_path: Path) -> None:
+    # run(..., keep_history=False): the Result holds the first and the latest recorded step only, the
+    # results file every step; the final state is the same as with the history kept (bit for bit)
+    model = rod_model()
+    settings = rod_settings("srdda", 60)
+    full = srdda.run(model, settings)
+    streamed = srdda.run(model, settings, recorders=[ResultsStore(tmp_path / "s.h5", settings, flush_every=7)],
+                         keep_history=False)
+    assert streamed.step == [0, 60] and len(streamed.velocity) == 2
+    np.testing.assert_array_equal(streamed.final_state.velocity, full.final_state.velocity)
+    stored = read_results(tmp_path / "s.h5")
+    np.testing.assert_array_equal(stored.array("velocity"), full.array("velocity"))

@@ -23,7 +23,7 @@ from .integrators.methods import METHODS
 from .cli_results import animate_command, plot_command, report_paper, resume_run, vtk_command
 from .io.convert import convert
 from .io.modelfile import ModelFileError, format_validation, load_model, read_model_text
-from .io.results_store import OutputExistsError, ResultsStore, ResultsWriteError
+from .io.results_store import OutputExistsError, ResultsStore, ResultsWriteError, read_results
 from .paper import EXAMPLES, relative_error, run_example
 from .results import Result
 from .settings import RunSettings
@@ -54,21 +54,27 @@ def _override(settings: RunSettings, option: str, **changes: object) -> RunSetti
         raise click.UsageError(format_validation(exc, option, "conflicts with the model's run settings")) from None
 
 
-def save_histories(result: Result, out: Path) -> Path:
-    """Write a run's histories as ``histories.npz`` and a ``summary.json`` in ``out``."""
+HISTORIES = ("step", "time", "centroid", "area", "rotation", "velocity", "stress", "measured_position",
+             "measured_velocity", "energy", "iterations")
+
+
+def save_histories(results_file: Path, result: Result, out: Path) -> tuple[Path, int]:
+    """Write a run's block histories as ``histories.npz`` and a ``summary.json`` in ``out``.
+
+    They are read from the results file the run streamed to (every recorded
+    step, not the vertices), so the run itself keeps no history in memory.
+    Returns the file written and the number of recorded steps.
+    """
     out.mkdir(parents=True, exist_ok=True)
-    energy_keys = list(result.energy[0]) if result.energy else []
-    np.savez_compressed(
-        out / "histories.npz", step=result.array("step"), time=result.array("time"),
-        centroid=result.array("centroid"), area=result.array("area"), rotation=result.array("rotation"),
-        velocity=result.array("velocity"), stress=result.array("stress"),
-        measured_position=result.array("measured_position"), measured_velocity=result.array("measured_velocity"),
-        energy=result.array("energy"), energy_keys=np.array(energy_keys), iterations=result.array("iterations"))
+    stored = read_results(results_file, names=HISTORIES)
+    arrays = {name: stored.array(name) for name in HISTORIES}
+    np.savez_compressed(out / "histories.npz", **arrays, energy_keys=np.array(stored.energy_names))
+    steps = arrays["step"]
     summary = {"method": result.method, "status": result.status, "blocks": list(result.block_names),
-               "recorded_steps": len(result.step), "last_step": result.step[-1] if result.step else None,
-               "last_time": result.time[-1] if result.time else None}
+               "recorded_steps": len(steps), "last_step": int(steps[-1]) if len(steps) else None,
+               "last_time": float(arrays["time"][-1]) if len(steps) else None}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    return out / "histories.npz"
+    return out / "histories.npz", len(steps)
 
 
 def new_output_folder(model: str) -> Path:
@@ -143,8 +149,8 @@ def run_command(model: str | None, method: str | None, steps: int | None, out: s
     try:
         with tqdm(total=settings.n_steps, disable=True if quiet else None, unit="step",
                   desc=settings.method) as bar:
-            result = run(mdl, settings, progress=lambda _: bar.update(1), recorders=[store])
-        path = save_histories(result, out_dir)
+            result = run(mdl, settings, progress=lambda _: bar.update(1), recorders=[store], keep_history=False)
+        path, recorded = save_histories(store.path, result, out_dir)
     except ResultsWriteError as exc:
         if exc.cut_short:  # HDF5 may crash in its exit handler after a flush that failed half-way: skip it
             click.echo(f"Error: {exc}", err=True)
@@ -154,7 +160,7 @@ def run_command(model: str | None, method: str | None, steps: int | None, out: s
         raise click.ClickException(str(exc)) from None
     except OSError as exc:
         raise click.ClickException(f"cannot write the histories in {out_dir} ({exc.strerror})") from None
-    click.echo(f"{result.status}: {len(result.step)} recorded steps written to {store.path} and {path}")
+    click.echo(f"{result.status}: {recorded} recorded steps written to {store.path} and {path}")
     if not result.completed:
         sys.exit(3)
 

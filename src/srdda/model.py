@@ -292,7 +292,7 @@ class Model:
         """Index of the block containing ``point`` (on its boundary counts)."""
         found = self.blocks_at(point)
         if not found:
-            raise ModelError(f"{what} at {tuple(point)} lies in no block")
+            raise ModelError(f"{what} at {tuple(float(c) for c in point)} lies in no block")
         return found[0]
 
     def _resolve(self, point: Sequence[float], block: int | None, what: str) -> tuple[int, np.ndarray]:
@@ -347,9 +347,10 @@ class Model:
                   point_b: Sequence[float] | None = None, correct_drift: bool = True, name: str = "") -> int:
         """Keep ``point`` of block a on ``point_b`` (default: the same point) of block b, exactly.
 
-        Without block indices the two blocks that contain the point are used.
-        ``correct_drift=False`` is the paper's Eq. 72 (right-hand side 0).
-        Returns the hinge's index (its force is ``Result.constraint_force[:, i]``).
+        Without block indices the two blocks that contain the point are used;
+        each point must lie in (or on) its block. ``correct_drift=False`` is the
+        paper's Eq. 72 (right-hand side 0). Returns the hinge's index: the force on
+        its first point is ``srdda.hinge_forces(arrays.links, result.multipliers[k])[i]``.
         """
         what = name or f"hinge {len(self.hinges)}"
         pa = np.asarray(point, dtype=float)
@@ -367,6 +368,10 @@ class Model:
             raise ModelError(f"{what}: block_a and block_b must differ")
         if self.blocks[a].fixed and self.blocks[b].fixed:
             raise ModelError(f"{what}: both blocks are fixed")
+        for block, p in ((a, pa), (b, pb)):
+            if block not in self.blocks_at(p):
+                raise ModelError(f"{what}: point {tuple(float(c) for c in p)} lies outside block "
+                                 f"{self.blocks[block].name!r}")
         self.hinges.append(HingeSpec(a, pa, b, pb, bool(correct_drift), what))
         return len(self.hinges) - 1
 

@@ -747,12 +747,15 @@ class StoredResult:
         return {k: v[off[index]:off[index + 1]] for k, v in self.contacts.items() if k not in ("offsets", "step")}
 
 
-def read_results(path: str | Path) -> StoredResult:
-    """Read every flushed step of a results file (also of a run that was killed)."""
+def read_results(path: str | Path, names: Sequence[str] | None = None) -> StoredResult:
+    """Read every flushed step of a results file (also of a run that was killed).
+
+    ``names`` reads only those histories (e.g. leave out the vertices of a large model).
+    """
     with _open_read(path) as f:
         hist = f["history"]
         n = _group_length(hist)
-        histories = {k: ds[:n] for k, ds in hist.items()}
+        histories = {k: ds[:n] for k, ds in hist.items() if names is None or k in names}
         g = f["model"]
         c = f["contacts"]
         contacts: dict[str, np.ndarray] = {}
