@@ -9,6 +9,7 @@ from click.testing import CliRunner
 from pydantic import ValidationError
 
 import srdda
+import srdda.io
 from srdda import settings as settings_module
 from srdda.cli import main
 from srdda.io.modelfile import ModelFileError, model_from_dict
@@ -81,3 +82,18 @@ def test_end_time_is_reached_exactly():
     assert result.completed
     assert result.time[-1] == pytest.approx(0.01, rel=1e-12)  # the last step is shortened to land on it
     assert result.step[-1] == 4  # 3 steps of 3 ms and one of 1 ms
+
+
+def test_cli_end_time_replaces_the_step_count(tmp_path):
+    model = srdda.Model(gravity=(0.0, -9.81))
+    model.add_material("m", srdda.Material(1000.0, 1e9, 0.2))
+    model.add_block([[0, 0], [1, 0], [1, 1]], "m")
+    path = tmp_path / "m.toml"
+    srdda.io.save_model(model, RunSettings(dt=1e-3, n_steps=1000), path)
+    out = CliRunner().invoke(main, ["run", str(path), "--end-time", "0.0105", "--out", str(tmp_path / "o"),
+                                    "--quiet"])
+    assert out.exit_code == 0, out.output
+    stored = srdda.read_results(tmp_path / "o" / "results.h5")
+    assert stored.array("time")[-1] == pytest.approx(0.0105, rel=1e-12) and stored.array("step")[-1] == 11
+    bad = CliRunner().invoke(main, ["run", str(path), "--end-time", "-1", "--out", str(tmp_path / "p")])
+    assert bad.exit_code == 2 and "end_time" in bad.output and "Traceback" not in bad.output

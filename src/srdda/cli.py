@@ -51,7 +51,7 @@ def _override(settings: RunSettings, option: str, **changes: object) -> RunSetti
     try:
         return replace(settings, **changes)
     except ValidationError as exc:
-        raise click.UsageError(format_validation(exc, option, "conflicts with the model's run settings")) from None
+        raise click.UsageError(format_validation(exc, option, "invalid with the model's run settings")) from None
 
 
 HISTORIES = ("step", "time", "centroid", "area", "rotation", "velocity", "stress", "measured_position",
@@ -110,6 +110,8 @@ def output_folder(model: str, out: str | None) -> Path:
 @click.argument("model", type=click.Path(exists=True, dir_okay=False), required=False)
 @click.option("--method", type=click.Choice(METHODS), help="Override the model file's method.")
 @click.option("--steps", type=click.IntRange(min=0), help="Override the number of steps.")
+@click.option("--end-time", type=float, default=None,
+              help="Run until this time (s) instead of the model's step count (with --steps: the first reached).")
 @click.option("--out", "out", type=click.Path(file_okay=False), default=None,
               help="Output folder (default: a new folder named after MODEL in the current directory: "
                    "NAME, or NAME-2, NAME-3, ... if that exists).")
@@ -119,8 +121,8 @@ def output_folder(model: str, out: str | None) -> Path:
               help="Continue the run of a results.h5 from its last flush (instead of MODEL).")
 @click.option("--flush-every", type=click.IntRange(min=1), default=100, show_default=True,
               help="Recorded steps between flushes of results.h5 (what a killed run can lose).")
-def run_command(model: str | None, method: str | None, steps: int | None, out: str | None, overwrite: bool,
-                quiet: bool, resume_file: str | None, flush_every: int) -> None:
+def run_command(model: str | None, method: str | None, steps: int | None, end_time: float | None, out: str | None,
+                overwrite: bool, quiet: bool, resume_file: str | None, flush_every: int) -> None:
     """Run a model file; write results.h5 (see srdda plot/animate/vtk) and its time histories."""
     if resume_file is not None:
         if model is not None:
@@ -133,8 +135,9 @@ def run_command(model: str | None, method: str | None, steps: int | None, out: s
     mdl, settings = _load(model)
     if method:
         settings = _override(settings, "--method", method=method)
-    if steps is not None:
-        settings = _override(settings, "--steps", n_steps=steps)
+    if steps is not None or end_time is not None:
+        settings = _override(settings, "--steps/--end-time", n_steps=steps,
+                             end_time=settings.end_time if end_time is None else end_time)
     out_dir = output_folder(model, out)
     store = ResultsStore(out_dir / "results.h5", settings, flush_every=flush_every, overwrite=overwrite,
                          model_text=read_model_text(model))
