@@ -1,7 +1,7 @@
 """``srdda bench``: run the standard models for a fixed number of steps and time them.
 
 Each model runs in a fresh Python process (``python -m srdda.bench.runner``),
-so that its peak memory (``ru_maxrss`` of that process) is its own and one
+so that its peak memory (:func:`peak_memory_mb`) is its own and one
 model's numba compilation, caches or leaks do not bias the next. The child
 prints one JSON row; the parent collects the rows and prints them.
 
@@ -166,6 +166,24 @@ class _TimedSolver:
         return self._solve(system, rhs)
 
 
+def peak_memory_mb() -> float:
+    """Peak resident memory of this process (MB).
+
+    Linux's ``ru_maxrss`` carries over an exec the peak of the process that
+    forked it (here the parent, which may have run other benchmarks), so the
+    resident high-water mark of this process's own address space (``VmHWM``)
+    is read where it exists.
+    """
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024.0  # kB
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
+
+
 def _warm_up() -> None:
     """Compile the numba kernels (contact detection) on a tiny wall, outside the timing."""
     model, settings = brick_wall(2, 2)
@@ -201,7 +219,7 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
         "dt": settings.dt, "sim_time": probe.sim_time, "steps_per_s": n / wall if wall > 0 else 0.0,
         "solves_per_step": float(np.mean(probe.accepted_solves)) if n else None,
         "rejected_steps": probe.rejected,
-        "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,  # Linux: kB
+        "peak_mb": peak_memory_mb(),
         "steps_requested": steps, "attempts": probe.attempts, "solves_total": probe.solves,
         "mean_accepted_dt": float(np.mean(probe.accepted_dt)) if n else None,
         "contacts_per_attempt": float(np.mean(probe.contacts)) if probe.contacts else 0.0,
