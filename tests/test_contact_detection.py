@@ -12,7 +12,7 @@ D0 = 0.05
 
 
 def _model(*blocks):
-    m = srdda.Model()
+    m = srdda.Model(allow_overlap=True)  # some cases put a vertex inside the other block on purpose
     m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
     for b in blocks:
         m.add_block(b, "rock")

@@ -94,7 +94,7 @@ def test_rockfall_tables_have_every_row(rockfall_srdda):
 def test_contact_transfer_keeps_reference_state_and_bond():
     # A locked contact found again keeps its shear reference point, state, normal force and bond;
     # a sliding one restarts its reference at the projection (Shi); a new one is not bonded.
-    m = srdda.Model()
+    m = srdda.Model(allow_overlap=True)  # the second block starts 0.1 mm into the first: a closed contact
     m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
     m.add_block([[-2, -1], [2, -1], [2, 0], [-2, 0]], "rock")
     m.add_block([[0, -1e-4], [1, -1e-4], [1, 1], [0, 1]], "rock")

@@ -282,3 +282,38 @@ def test_a_hinge_point_outside_its_named_blocks_is_an_error():
     with pytest.raises(srdda.ModelError, match=r"hinge 0: point \(5.0, 0.5\) lies outside block 'block 0'"):
         m.add_hinge((5.0, 0.5), block_a=a, block_b=b)
     assert m.add_hinge((1.0, 0.5), block_a=a, block_b=b) == 0  # on the shared edge: in both blocks
+
+
+def test_blocks_overlapping_at_the_start_are_an_error_naming_them():
+    m = srdda.Model()
+    m.add_material("rock", srdda.Material(2500.0, 1e9, 0.25))
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock", name="lower")
+    m.add_block([[0.5, 0.9], [1.5, 0.9], [1.5, 2], [0.5, 2]], "rock", name="upper")
+    m.add_block([[1, 0], [2, 0], [2, 0.9], [1, 0.9]], "rock", name="beside")  # touches both: no overlap
+    with pytest.raises(srdda.ModelError, match=r"blocks overlap at the start: 'lower' and 'upper' \(0.05 m²\)"):
+        m.arrays()
+    m.allow_overlap = True  # deliberately: their contacts push them apart
+    assert m.arrays().n_blocks == 3
+
+
+@pytest.mark.parametrize("bad", [
+    lambda m: m.add_block([[0, 0], [1, 0], [1, 1]], "rock", velocity=(float("nan"), 0.0)),
+    lambda m: m.add_block([[0, 0], [1, 0], [1, 1]], "rock", angular_velocity=float("inf")),
+    lambda m: m.add_material("x", srdda.Material(2500.0, float("inf"), 0.25)),
+    lambda m: m.add_point_load((0.5, 0.5), (float("nan"), 0.0), block=0),
+    lambda m: m.add_point_spring((0.1, 0.1), (0.2, 0.1), float("inf"), block_a=0, block_b=0),
+])
+def test_non_finite_inputs_are_named_errors(bad):
+    m = srdda.Model()
+    m.add_material("rock", srdda.Material(2500.0, 1e9, 0.25))
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+    with pytest.raises(srdda.ModelError, match="finite"):
+        bad(m)
+
+
+def test_non_finite_gravity_is_a_named_error():
+    m = srdda.Model(gravity=(0.0, float("nan")))
+    m.add_material("rock", srdda.Material(2500.0, 1e9, 0.25))
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+    with pytest.raises(srdda.ModelError, match="gravity must be finite"):
+        m.arrays()

@@ -51,8 +51,12 @@ class TimeHistory:
             if np.any(np.diff(tab[:, 0]) <= 0):
                 raise HistoryError("history table times must increase strictly")
             object.__setattr__(self, "table", tab)
-        if self.amplitude is not None and not (self.period is not None and self.period > 0):
-            raise HistoryError("a sine history needs a period > 0 (s)")
+        if self.amplitude is not None and not (self.period is not None and 0 < self.period < np.inf):
+            raise HistoryError("a sine history needs a finite period > 0 (s)")
+        for name in ("constant", "table", "amplitude"):
+            value = getattr(self, name)
+            if value is not None and not np.all(np.isfinite(np.asarray(value, dtype=float))):
+                raise HistoryError(f"a history's {name} must hold finite numbers")
 
     @staticmethod
     def sine(amplitude: Sequence[float], period: float, phase: float = 0.0) -> TimeHistory:

@@ -16,7 +16,7 @@ import shapely
 
 from .constraints.data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
 from .history import HistoryError, MotionHistory, TimeHistory
-from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon
+from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon, overlapping_pairs
 from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_polyhedron, polyhedron_covers,
                                   polyhedron_moments, prism)
 from .kinematics.blocktype import PLANE, SOLID, BlockType, block_type_of_dimension
@@ -29,6 +29,14 @@ class ModelError(ValueError):
     """The model is inconsistent (the message names the item and the problem)."""
 
 
+def _finite(values: Sequence[float] | float, what: str) -> tuple[float, ...]:
+    """``values`` as floats, or a ModelError naming ``what`` if one is not a finite number."""
+    numbers = tuple(float(v) for v in np.atleast_1d(np.asarray(values, dtype=float)))
+    if not all(np.isfinite(numbers)):
+        raise ModelError(f"{what} must be finite numbers, got {list(numbers)}")
+    return numbers
+
+
 @dataclass(frozen=True)
 class Material:
     """Block material. ``density`` kg/m³, ``young`` Pa, ``poisson`` (-), 2D idealisation."""
@@ -39,10 +47,10 @@ class Material:
     plane: Literal["stress", "strain"] = "stress"
 
     def __post_init__(self) -> None:
-        if not self.density >= 0:
-            raise ModelError(f"material density must be >= 0, got {self.density}")
-        if not self.young > 0:
-            raise ModelError(f"material young must be > 0, got {self.young}")
+        if not 0 <= self.density < np.inf:
+            raise ModelError(f"material density must be finite and >= 0, got {self.density}")
+        if not 0 < self.young < np.inf:
+            raise ModelError(f"material young must be finite and > 0, got {self.young}")
         upper = 0.5 if self.plane == "stress" else 0.5
         if not -1.0 < self.poisson < upper:
             raise ModelError(f"material poisson must lie in (-1, 0.5), got {self.poisson}")
@@ -61,10 +69,10 @@ class JointMaterial:
     def __post_init__(self) -> None:
         if not 0.0 <= self.friction_angle < 90.0:
             raise ModelError(f"joint friction_angle must lie in [0, 90) degrees, got {self.friction_angle}")
-        if not self.cohesion >= 0:
-            raise ModelError(f"joint cohesion must be >= 0, got {self.cohesion}")
-        if not self.tensile_strength >= 0:
-            raise ModelError(f"joint tensile_strength must be >= 0, got {self.tensile_strength}")
+        if not 0 <= self.cohesion < np.inf:
+            raise ModelError(f"joint cohesion must be finite and >= 0, got {self.cohesion}")
+        if not 0 <= self.tensile_strength < np.inf:
+            raise ModelError(f"joint tensile_strength must be finite and >= 0, got {self.tensile_strength}")
 
 
 def elasticity_matrix(mat: Material) -> np.ndarray:
@@ -182,6 +190,7 @@ class Model:
     springs: list[SpringSpec] = field(default_factory=list)
     prescribed: list[PrescribedSpec] = field(default_factory=list)
     base_acceleration: MotionHistory | None = None
+    allow_overlap: bool = False  # True: blocks that overlap at the start are accepted (their contacts push them apart)
 
     # -- building ---------------------------------------------------------
     def add_material(self, name: str, material: Material) -> str:
@@ -234,12 +243,13 @@ class Model:
                 raw = raw[:-1]
             if not np.array_equal(raw, verts):  # reversed to counter-clockwise: edge i -> edge n-2-i
                 joints = tuple(joints[(len(joints) - 2 - i) % len(joints)] for i in range(len(joints)))
-        v = tuple(float(a) for a in velocity)
+        v = _finite(velocity, f"{label}: velocity")
         if len(v) != 2:
             raise ModelError(f"{label}: velocity must be [vx, vy]")
-        s = tuple(float(a) for a in stress)
+        s = _finite(stress, f"{label}: stress")
         if len(s) != 3:
             raise ModelError(f"{label}: stress must be [sx, sy, txy]")
+        angular_velocity = _finite(angular_velocity, f"{label}: angular_velocity")[0]
         mat_index = list(self.materials).index(material)
         self.blocks.append(_Block(verts, mat_index, (v[0], v[1], float(angular_velocity)), s, label, bool(fixed),
                                   joints))
@@ -270,7 +280,9 @@ class Model:
             raise ModelError(f"{label}: unknown material {material!r}")
         self._same_dimension(SOLID.dim, label)
         verts, outward = normalize_polyhedron(vertices, faces, label)
-        v, w, s = (tuple(float(a) for a in x) for x in (velocity, angular_velocity, stress))
+        v, w, s = (_finite(x, f"{label}: {name}") for x, name in ((velocity, "velocity"),
+                                                                   (angular_velocity, "angular_velocity"),
+                                                                   (stress, "stress")))
         if len(v) != SOLID.dim or len(w) != SOLID.dim:
             raise ModelError(f"{label}: velocity and angular_velocity are [x, y, z] vectors")
         if len(s) != SOLID.n_strain:
@@ -308,6 +320,8 @@ class Model:
     def add_fixed_point(self, point: Sequence[float], block: int | None = None, stiffness: float | None = None) -> None:
         """Pin ``point`` of a block to where it is now by a penalty spring (N/m; default: the run's penalty)."""
         b, p = self._resolve(point, block, "fixed point")
+        if stiffness is not None and not 0 < stiffness < np.inf:
+            raise ModelError(f"fixed point stiffness must be finite and > 0, got {stiffness}")
         self.fixed_points.append((b, p, np.nan if stiffness is None else float(stiffness)))
 
     def add_point_load(self, point: Sequence[float], force: object, block: int | None = None) -> None:
@@ -323,8 +337,8 @@ class Model:
         """Tie a point of one block to a point of another by a zero-length spring (N/m)."""
         a, pa = self._resolve(point_a, block_a, "point spring end a")
         b, pb = self._resolve(point_b, block_b, "point spring end b")
-        if not stiffness > 0:
-            raise ModelError("point spring stiffness must be > 0")
+        if not 0 < stiffness < np.inf:
+            raise ModelError(f"point spring stiffness must be finite and > 0, got {stiffness}")
         self.point_springs.append((a, pa, b, pb, float(stiffness)))
 
     def add_measured_point(self, point: Sequence[float], block: int | None = None) -> int:
@@ -391,10 +405,10 @@ class Model:
         """A linear spring (N/m) with optional dashpot (N·s/m) between two block points (see SpringSpec)."""
         a, pa = self._resolve(point_a, block_a, "spring end a")
         b, pb = self._resolve(point_b, block_b, "spring end b")
-        if not stiffness > 0:
-            raise ModelError(f"spring stiffness must be > 0, got {stiffness}")
-        if not damping >= 0:
-            raise ModelError(f"spring damping must be >= 0, got {damping}")
+        if not 0 < stiffness < np.inf:
+            raise ModelError(f"spring stiffness must be finite and > 0, got {stiffness}")
+        if not 0 <= damping < np.inf:
+            raise ModelError(f"spring damping must be finite and >= 0, got {damping}")
         if kind not in ("axial", "offset"):
             raise ModelError(f"spring kind must be 'axial' or 'offset', got {kind!r}")
         if kind == "axial" and np.allclose(pa, pb):
@@ -425,8 +439,8 @@ class Model:
                              f"{components!r}")
         if by not in ("multiplier", "penalty"):
             raise ModelError(f"prescribed 'by' must be 'multiplier' or 'penalty', got {by!r}")
-        if stiffness is not None and not stiffness > 0:
-            raise ModelError(f"prescribed stiffness must be > 0, got {stiffness}")
+        if stiffness is not None and not 0 < stiffness < np.inf:
+            raise ModelError(f"prescribed stiffness must be finite and > 0, got {stiffness}")
         try:
             hist = MotionHistory.of(history)
         except HistoryError as exc:
@@ -440,6 +454,17 @@ class Model:
             self.base_acceleration = MotionHistory.of(history)
         except HistoryError as exc:
             raise ModelError(f"base acceleration: {exc}") from exc
+
+    def _check_overlaps(self, vertices: np.ndarray, block_ptr: np.ndarray) -> None:
+        """ModelError naming the blocks that overlap at the start (more than 1e-6 of the smaller area)."""
+        pairs, areas = overlapping_pairs(vertices, block_ptr)
+        if len(pairs):
+            shown = ", ".join(f"{self.blocks[a].name!r} and {self.blocks[b].name!r} ({area:.3g} m²)"
+                              for (a, b), area in zip(pairs[:5], areas[:5]))
+            more = f" and {len(pairs) - 5} more pairs" if len(pairs) > 5 else ""
+            raise ModelError(f"blocks overlap at the start: {shown}{more}; move them apart, or set "
+                             "allow_overlap (Model.allow_overlap = True, or allow_overlap = true in the model "
+                             "file) to let their contacts push them apart")
 
     def extruded(self, thickness: float = 1.0) -> Model:
         """This 2D model as 3D prisms from z = -thickness/2 to thickness/2, every point at z = 0.
@@ -485,6 +510,7 @@ class Model:
         if not self.blocks:
             raise ModelError("the model has no blocks")
         bt = block_type_of_dimension(self.dim)
+        _finite(self.gravity, "gravity")
         if len(self.gravity) != bt.dim:
             raise ModelError(f"gravity must have {bt.dim} components in a {bt.dim}D model, got {len(self.gravity)}")
         mats = list(self.materials.values())
@@ -535,8 +561,11 @@ class Model:
             np.full(len(b.vertices), -1) if b.edge_joints is None
             else np.array([-1 if j is None else joint_names.index(j) + 1 for j in b.edge_joints])
             for b in self.blocks]).astype(np.int64)
+        vertices = np.concatenate([b.vertices for b in self.blocks])
+        if bt is PLANE and not self.allow_overlap:
+            self._check_overlaps(vertices, block_ptr)
         return ModelArrays(
-            vertices=np.concatenate([b.vertices for b in self.blocks]),
+            vertices=vertices,
             block_ptr=block_ptr,
             density=np.array([mats[b.material].density for b in self.blocks]),
             elasticity=elasticity,

@@ -83,7 +83,7 @@ def model_from_dict(data: dict[str, Any], source: str = "model") -> tuple[Model,
 
 
 def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
-    model = Model(gravity=spec.gravity)
+    model = Model(gravity=spec.gravity, allow_overlap=spec.allow_overlap)
     for name, m in spec.materials.items():
         model.add_material(name, Material(m.density, m.young, m.poisson, m.plane))
     for name, j in spec.joint_materials.items():
@@ -267,6 +267,7 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
     mats = list(model.materials)
     run = _run_dict(settings)
     out: dict[str, Any] = {"title": title, "units": "SI", "gravity": list(map(float, model.gravity)), "run": run,
+                           **({"allow_overlap": True} if model.allow_overlap else {}),
                            "materials": {n: {"density": m.density, "young": m.young, "poisson": m.poisson,
                                              "plane": m.plane} for n, m in model.materials.items()}}
     if model.joint_materials:

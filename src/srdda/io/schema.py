@@ -151,6 +151,7 @@ class ModelFile(_Strict):
     title: str = ""
     units: Literal["SI"] = "SI"
     gravity: Point = (0.0, 0.0)
+    allow_overlap: bool = False  # accept blocks that overlap at the start (their contacts push them apart)
     run: RunSettings  # the run settings (srdda.settings), validated where they are defined
     materials: dict[str, MaterialSection] = Field(min_length=1)
     joint_materials: dict[str, JointMaterialSection] = {}
