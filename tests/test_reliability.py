@@ -317,3 +317,22 @@ def test_non_finite_gravity_is_a_named_error():
     m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
     with pytest.raises(srdda.ModelError, match="gravity must be finite"):
         m.arrays()
+
+
+def test_warnings_of_a_run_are_summarised_once():
+    # a load function that warns at every call (two calls per step here) gives one warning with its count
+    import warnings
+
+    def load(t):
+        warnings.warn("load table extrapolated", RuntimeWarning)
+        return (0.0, -1.0)
+
+    m = srdda.Model()
+    m.add_material("rock", srdda.Material(2500.0, 1e9, 0.25))
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+    m.add_point_load((0.5, 0.5), load, block=0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=50, method="dda0"))
+    messages = [str(w.message) for w in caught if w.category is RuntimeWarning]
+    assert messages == ["load table extrapolated (100 times in the run, first at step 1)"]

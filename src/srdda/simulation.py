@@ -8,7 +8,9 @@ the end stays recorded.
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import warnings
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import replace
 
 from .ledger import energies
@@ -50,9 +52,11 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     min_dt = settings.min_dt if settings.min_dt is not None else 1e-6 * settings.dt
     status = "completed"
     dt = state.dt_next if state.dt_next is not None else settings.dt
+    summary = WarningSummary()
     while state.step < last_step and (end_time is None or not _reached(state.time, end_time, settings.dt)):
         step_dt = dt if end_time is None else min(dt, end_time - state.time)
-        outcome = stepper.step(state, step_dt)
+        with summary.collect(state.step + 1):
+            outcome = stepper.step(state, step_dt)
         if outcome.status == "diverged":
             status = f"diverged: {outcome.reason}"
             break
@@ -72,7 +76,29 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
             progress(state.step)
     for sink in sinks:
         sink.finish(status, state)
+    summary.emit()
     return result
+
+
+class WarningSummary:
+    """The warnings of a run's steps, collected and given once each with their count (no flood)."""
+
+    def __init__(self) -> None:
+        self.seen: dict[tuple[type[Warning], str], list[int]] = {}  # (category, message) -> [count, first step]
+
+    @contextmanager
+    def collect(self, step: int) -> Iterator[None]:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            yield
+        for w in caught:
+            entry = self.seen.setdefault((w.category, str(w.message)), [0, step])
+            entry[0] += 1
+
+    def emit(self) -> None:
+        for (category, message), (count, first) in self.seen.items():
+            times = "once" if count == 1 else f"{count} times"
+            warnings.warn(f"{message} ({times} in the run, first at step {first})", category, stacklevel=3)
 
 
 def _reached(time: float, end_time: float, dt: float) -> bool:
