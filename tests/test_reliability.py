@@ -336,3 +336,30 @@ def test_warnings_of_a_run_are_summarised_once():
         srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=50, method="dda0"))
     messages = [str(w.message) for w in caught if w.category is RuntimeWarning]
     assert messages == ["load table extrapolated (100 times in the run, first at step 1)"]
+
+
+@pytest.mark.parametrize("blocks, problem", [
+    ('''[[blocks]]
+material = "r"
+vertices = [[0, 0], [1, 0], [1, 1], [0, 1]]
+[[blocks]]
+material = "r"
+vertices = [[0.5, 0.5], [1.5, 0.5], [1.5, 1.5], [0.5, 1.5]]
+''', "blocks overlap at the start"),
+    ('''[[blocks]]
+material = "r"
+box = [[0, 0, 0], [1, 1, 1]]
+[[blocks]]
+material = "r"
+box = [[0, 0, 1], [1, 1, 2]]
+''', "contacts between 3D blocks are not available yet"),
+])
+def test_a_model_the_run_cannot_take_is_one_message_before_any_output(tmp_path, blocks, problem):
+    gravity = "[0.0, 0.0, -9.81]" if "box" in blocks else "[0.0, -9.81]"
+    path = tmp_path / "m.toml"
+    path.write_text(f"gravity = {gravity}\n[run]\ndt = 1e-3\nsteps = 5\n[materials.r]\ndensity = 2500.0\n"
+                    f"young = 1e9\npoisson = 0.2\n{blocks}", encoding="utf-8")
+    for command in (["check", str(path)], ["run", str(path), "--out", str(tmp_path / "out")]):
+        out = CliRunner().invoke(main, command)
+        assert out.exit_code == 2 and problem in out.output and "Traceback" not in out.output
+    assert not (tmp_path / "out").exists()

@@ -25,10 +25,12 @@ from .io.convert import convert
 from .io.modelfile import ModelFileError, format_validation, load_model, read_model_text
 from .io.results_store import OutputExistsError, ResultsStore, ResultsWriteError, read_results
 from .paper import EXAMPLES, relative_error, run_example
+from .model import Model, ModelArrays, ModelError
 from .results import Result
 from .settings import RunSettings
 from .simulation import run
-from .solvers import available_solvers
+from .solvers import available_solvers, get_solver
+from .step import Stepper
 
 __all__ = ["main"]
 
@@ -44,6 +46,16 @@ def _load(path: str):
         return load_model(path)
     except ModelFileError as exc:
         raise click.UsageError(str(exc)) from None
+
+
+def _compile(model: Model, settings: RunSettings, source: str) -> ModelArrays:
+    """The model's arrays, checked with its run settings as the run will check them (one message, exit 2)."""
+    try:
+        arrays = model.arrays()
+        Stepper(arrays, settings, get_solver(settings.solver))
+    except ModelError as exc:
+        raise click.UsageError(f"{source}: {exc}") from None
+    return arrays
 
 
 def _override(settings: RunSettings, option: str, **changes: object) -> RunSettings:
@@ -138,6 +150,7 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
     if steps is not None or end_time is not None:
         settings = _override(settings, "--steps/--end-time", n_steps=steps,
                              end_time=settings.end_time if end_time is None else end_time)
+    arrays = _compile(mdl, settings, model)  # before any output is made
     out_dir = output_folder(model, out)
     store = ResultsStore(out_dir / "results.h5", settings, flush_every=flush_every, overwrite=overwrite,
                          model_text=read_model_text(model))
@@ -152,7 +165,7 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
     try:
         with tqdm(total=settings.n_steps, disable=True if quiet else None, unit="step",
                   desc=settings.method) as bar:
-            result = run(mdl, settings, progress=lambda _: bar.update(1), recorders=[store], keep_history=False)
+            result = run(arrays, settings, progress=lambda _: bar.update(1), recorders=[store], keep_history=False)
         path, recorded = save_histories(store.path, result, out_dir)
     except ResultsWriteError as exc:
         if exc.cut_short:  # HDF5 may crash in its exit handler after a flush that failed half-way: skip it
@@ -173,9 +186,10 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
 def check_command(model: str) -> None:
     """Validate a model file without running it."""
     mdl, settings = _load(model)
-    arrays = mdl.arrays()
-    click.echo(f"ok: {arrays.n_blocks} blocks, {len(arrays.vertices)} vertices, method {settings.method}, "
-               f"{settings.n_steps} steps of {settings.dt} s")
+    arrays = _compile(mdl, settings, model)
+    length = f"{settings.n_steps} steps" if settings.n_steps is not None else f"until t = {settings.end_time} s"
+    click.echo(f"ok: {arrays.n_blocks} blocks ({arrays.block_type.dim}D), {len(arrays.vertices)} vertices, method "
+               f"{settings.method}, {length} of {settings.dt} s")
 
 
 @main.command("info")

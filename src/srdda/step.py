@@ -27,7 +27,7 @@ from .contact.term import ContactModel, ContactParameters, ContactTerm
 from .integrators.methods import Method
 from .kinematics.blocktype import PLANE
 from .integrators.secant import SecantPass
-from .model import ModelArrays
+from .model import ModelArrays, ModelError
 from .settings import RunSettings
 from .solvers import LinearSolver, SolverError
 from .state import State
@@ -78,7 +78,7 @@ class Stepper:
         if self.method.gyroscopic and bt.rotation.stop - bt.rotation.start > 1:  # rotations about several axes
             self.terms.append(GyroscopicTerm(settings.secant_tolerance))
         if settings.contacts and arrays.n_blocks > 1 and bt is not PLANE:
-            raise ValueError("contacts between 3D blocks are not available yet: set contacts = false "
+            raise ModelError("contacts between 3D blocks are not available yet: set contacts = false "
                              "(blocks then interact through points, springs and hinges only)")
         if settings.contacts and arrays.n_blocks > 1:
             w0 = model_half_height(arrays.vertices)
