@@ -156,14 +156,15 @@ class Stepper:
         new = self._update(ctx, dd, multipliers)
         if not (np.all(np.isfinite(new.vertices)) and np.all(np.isfinite(new.velocity))):
             return StepOutcome("diverged", solves, dt, reason=f"step {new.step}: non-finite displacement or velocity")
-        dt_next = dt
+        bounds = []  # the largest Δt each term allows for the next step
         for term in terms:
             verdict = term.review(ctx, new)
             if isinstance(verdict, StepCut):
                 return StepOutcome("cut", solves, dt * max(s.step_cut_factor, verdict.factor),
                                    reason=f"step {new.step}: {verdict.reason}")
             if verdict is not None:
-                dt_next = verdict
+                bounds.append(verdict)
+        dt_next = min(bounds) if bounds else dt
         work = [w for w in (t.work(ctx, new, dd, multipliers) for t in terms) if w is not None]
         if work:
             new = replace(new, ledger=state.ledger + np.sum(work, axis=0))
