@@ -9,6 +9,7 @@ Usage: python benchmarks/bench_core.py [--chain 1000] [--steps 200] [--json out.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import platform
 import time
@@ -45,16 +46,16 @@ def chain_model(n: int) -> srdda.Model:
     return m
 
 
-def time_steps(model: srdda.Model, method: str, steps: int, solver: str) -> float:
-    """Seconds per step (best of two runs, after one warm-up step)."""
+def time_steps(model: srdda.Model, method: str, steps: int, solver: str = "auto", penalty: float = 2e16) -> float:
+    """Seconds per step, contacts off (best of two runs, after one warm-up step)."""
     arrays = model.arrays()
-    warm = srdda.RunSettings(dt=1e-3, n_steps=1, method=method, solver=solver, penalty=2e16, contacts=False)
-    srdda.run(arrays, warm)
+    settings = srdda.RunSettings(dt=1e-3, n_steps=steps, method=method, solver=solver, penalty=penalty,
+                                 record_every=steps, contacts=False)
+    srdda.run(arrays, dataclasses.replace(settings, n_steps=1))
     best = np.inf
     for _ in range(2):
         t0 = time.perf_counter()
-        res = srdda.run(arrays, srdda.RunSettings(dt=1e-3, n_steps=steps, method=method, solver=solver,
-                                                  penalty=2e16, record_every=steps, contacts=False))
+        res = srdda.run(arrays, settings, keep_history=False)
         best = min(best, time.perf_counter() - t0)
         assert res.completed, res.status
     return best / steps

@@ -20,8 +20,8 @@ import numpy as np  # noqa: E402
 from matplotlib import animation  # noqa: E402
 
 from .io.results_store import StoredResult, read_results  # noqa: E402
-from .plotting import (solid_limits, block_values, history, method_label, plot_blocks,  # noqa: E402
-                       plot_solid_blocks, solid_faces)
+from .plotting import (block_values, history, plot_blocks, plot_solid_blocks, solid_faces,  # noqa: E402
+                       solid_limits, step_title)
 
 __all__ = ["animate", "ffmpeg_path"]
 
@@ -74,8 +74,7 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
 
     verts = history(res, "vertices")
     mp = history(res, "measured_position")
-    steps, times = history(res, "step"), history(res, "time")
-    frames = _frames(len(steps), max_frames)
+    frames = _frames(len(history(res, "step")), max_frames)
     if res.mesh is not None:
         _write_solid_animation(res, out, writer, frames, color, dpi)
         return
@@ -100,7 +99,7 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
             coll.set_array(block_values(res, i, color))
         for k, line in enumerate(trails):
             line.set_data(mp[: i + 1, k, 0], mp[: i + 1, k, 1])
-        ax.set_title(f"{method_label(res.method)}: step {int(steps[i])}, t = {float(times[i]):.4g} s")
+        ax.set_title(step_title(res, i))
         return [coll, *trails]
 
     _save(fig, draw, frames, out, writer, dpi)
@@ -111,7 +110,6 @@ def _write_solid_animation(res: StoredResult, out: Path, writer: animation.Abstr
     """The 3D blocks' faces and the measured points' paths, frame by frame."""
     verts = history(res, "vertices")
     mp = history(res, "measured_position")
-    steps, times = history(res, "step"), history(res, "time")
     mesh = res.mesh
     fig = plt.figure(figsize=(6.4, 5.6), layout="constrained")
     ax = fig.add_subplot(projection="3d")
@@ -130,7 +128,7 @@ def _write_solid_animation(res: StoredResult, out: Path, writer: animation.Abstr
             coll.set_array(block_values(res, i, color)[mesh.face_block])
         for k, line in enumerate(trails):
             line.set_data_3d(*mp[: i + 1, k].T)
-        ax.set_title(f"{method_label(res.method)}: step {int(steps[i])}, t = {float(times[i]):.4g} s")
+        ax.set_title(step_title(res, i))
         return [coll, *trails]
 
     _save(fig, draw, frames, out, writer, dpi)

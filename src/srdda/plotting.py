@@ -33,7 +33,7 @@ from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 __all__ = ["history", "quantity_names", "block_values", "method_label", "plot_blocks", "fig_configuration",
-           "fig_model", "fig_solid_model", "plot_solid_blocks", "solid_faces", "solid_limits",
+           "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
            "fig_trajectories", "fig_time_series",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index"]
 
@@ -183,17 +183,26 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     if values is not None:
         fig.colorbar(coll, ax=ax, label=color, shrink=0.7)
     if trails:
-        mp = history(res, "measured_position")
-        for k in range(mp.shape[1]):
-            ax.plot(mp[: index + 1, k, 0], mp[: index + 1, k, 1], lw=0.8, label=f"point {k}")
+        _trails(ax, res, index)
     allv = verts.reshape(-1, 2)
     pad = 0.05 * float(np.ptp(allv, axis=0).max() or 1.0)
     ax.set_xlim(allv[:, 0].min() - pad, allv[:, 0].max() + pad)
     ax.set_ylim(allv[:, 1].min() - pad, allv[:, 1].max() + pad)
-    ax.set(xlabel="x (m)", ylabel="y (m)",
-           title=f"{method_label(res.method)}: step {int(res.array('step')[index])}, "
-                 f"t = {float(res.array('time')[index]):.4g} s")
+    ax.set(xlabel="x (m)", ylabel="y (m)", title=step_title(res, index))
     return fig
+
+
+def step_title(res: Results, index: int) -> str:
+    """"METHOD: step N, t = T s" of recorded row ``index``."""
+    step, time = int(res.array("step")[index]), float(res.array("time")[index])
+    return f"{method_label(res.method)}: step {step}, t = {time:.4g} s"
+
+
+def _trails(ax: Any, res: Results, index: int) -> None:
+    """The measured points' paths up to recorded row ``index`` (2D or 3D axes)."""
+    mp = history(res, "measured_position")
+    for k in range(mp.shape[1]):
+        ax.plot(*mp[: index + 1, k].T, lw=0.8, label=f"point {k}")
 
 
 def solid_faces(vertices: np.ndarray, mesh: Any) -> tuple[list[np.ndarray], np.ndarray]:
@@ -234,12 +243,9 @@ def fig_solid_model(res: Results, index: int = -1, color: str | None = "speed", 
     if values is not None:
         fig.colorbar(coll, ax=ax, label=color, shrink=0.6)
     if trails:
-        mp = history(res, "measured_position")
-        for k in range(mp.shape[1]):
-            ax.plot(*mp[: index + 1, k].T, lw=0.8, label=f"point {k}")
+        _trails(ax, res, index)
     solid_limits(ax, verts.reshape(-1, verts.shape[-1]))
-    ax.set_title(f"{method_label(res.method)}: step {int(res.array('step')[index])}, "
-                 f"t = {float(res.array('time')[index]):.4g} s")
+    ax.set_title(step_title(res, index))
     return fig
 
 

@@ -92,8 +92,7 @@ class Stepper:
         """The context of a step attempt from ``state`` and the terms that take part, each begun."""
         method = self.method
         coeffs = method.scheme.coefficients(dt)
-        ctx = StepContext(self.arrays, state, method, coeffs, dt, state.time + coeffs.load_time_fraction * dt,
-                          self.settings.penalty)
+        ctx = StepContext(self.arrays, state, method, coeffs, dt, state.time + coeffs.load_time_fraction * dt)
         terms = list(self.terms)
         for term in terms:
             term.begin(ctx)

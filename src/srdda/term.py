@@ -45,7 +45,8 @@ LEDGER = ("work_loads", "work_prescribed", "work_constraints", "dissipated")
 class StepContext:
     """What a term needs during one step attempt.
 
-    ``theta`` is the rotation increment per block that the method linearises
+    Stiffnesses a term needs (the run's penalty) are given to it when it is
+    made. ``theta`` is the rotation increment per block that the method linearises
     about (None: Shi's T at t; else the secant T_sec, see
     :mod:`srdda.kinematics.update`); the secant pass updates it between solves.
     """
@@ -56,7 +57,6 @@ class StepContext:
     coeffs: SchemeCoefficients
     dt: float
     t_load: float
-    penalty: float
     theta: np.ndarray | None = None
 
     @property

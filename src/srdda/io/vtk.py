@@ -52,13 +52,20 @@ def blocks_mesh(vertices: np.ndarray, block_ptr: np.ndarray, velocity: np.ndarra
         "area": area,
         "area_change": area / initial_area - 1.0,
     }
+    return _grouped_mesh(_xyz(vertices), counts, per_block,
+                         lambda n, blocks: ("polygon", block_ptr[blocks][:, None] + np.arange(n)[None, :]))
+
+
+def _grouped_mesh(points: np.ndarray, counts: np.ndarray, per_block: dict[str, np.ndarray],
+                  cell_block: Callable[[int, np.ndarray], tuple[str, object]]) -> meshio.Mesh:
+    """A mesh of one cell per block, grouped by vertex count (meshio needs one cell type per group)."""
     cells, cell_data = [], {name: [] for name in per_block}
     for n in np.unique(counts):
         blocks = np.flatnonzero(counts == n)
-        cells.append(("polygon", block_ptr[blocks][:, None] + np.arange(n)[None, :]))
+        cells.append(cell_block(int(n), blocks))
         for name, values in per_block.items():
             cell_data[name].append(np.asarray(values)[blocks])
-    return meshio.Mesh(_xyz(vertices), cells, cell_data=cell_data)
+    return meshio.Mesh(points, cells, cell_data=cell_data)
 
 
 def solid_blocks_mesh(vertices: np.ndarray, mesh: PolyhedronMesh, velocity: np.ndarray, stress: np.ndarray,
@@ -87,13 +94,8 @@ def solid_blocks_mesh(vertices: np.ndarray, mesh: PolyhedronMesh, velocity: np.n
         "volume": volume,
         "volume_change": volume / initial_volume - 1.0,
     }
-    cells, cell_data = [], {name: [] for name in per_block}
-    for n in np.unique(counts):
-        blocks = np.flatnonzero(counts == n)
-        cells.append((f"polyhedron{n}", [per_block_faces[b] for b in blocks]))
-        for name, values in per_block.items():
-            cell_data[name].append(np.asarray(values)[blocks])
-    return meshio.Mesh(np.asarray(vertices, dtype=float), cells, cell_data=cell_data)
+    return _grouped_mesh(np.asarray(vertices, dtype=float), counts, per_block,
+                         lambda n, blocks: (f"polyhedron{n}", [per_block_faces[b] for b in blocks]))
 
 
 def contacts_mesh(contacts: Mapping[str, np.ndarray]) -> meshio.Mesh:
