@@ -198,3 +198,19 @@ def test_vertex_beside_an_acute_corner_is_not_a_contact_with_its_other_edge():
     assert {f for f in found if f[0] == v} == {(v, (0.0, 0.0), VERTEX_EDGE)}  # top edge (0,0)->(-1,0)
     corner = {f for f in found if f[0] == (0.0, 0.0)}
     assert corner == {((0.0, 0.0), v, VERTEX_EDGE)}  # the upper block's bottom edge only
+
+
+@pytest.mark.parametrize("outside", [0.0, 1e-12, 1e-10])
+def test_penetrating_corner_is_found_on_either_side_of_rounding(outside):
+    # A triangle's apex has penetrated 1e-8 m at the top-right corner of a block whose right
+    # face is sheared (obtuse corner). Rounding may put the apex just outside that face
+    # (by up to 1e-10 m here, far below 1e-6 of the 1 m edge): the contact must be found
+    # whatever side it lands on (issue 15, defect 9: a missed contact lets the penetration
+    # grow and the late spring then creates energy).
+    shear = 0.3  # the right face runs (1 - 0.3, 0) -> (1, 1)
+    normal = np.array([1.0, -shear]) / np.hypot(1.0, shear)  # outward normal of that face
+    apex = np.array([1.0, 1.0 - 1e-8]) + (outside + shear * 1e-8 / np.hypot(1.0, shear)) * normal
+    arr = _model([[0, 0], [1 - shear, 0], [1, 1], [0, 1]], [apex, apex + [0.3, 0.5], apex + [-0.3, 0.5]])
+    found = _detect(arr)
+    v = tuple(arr.vertices[4])
+    assert any(f[0] == v and f[1] == (1.0, 1.0) for f in found), found

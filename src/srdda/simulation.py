@@ -13,15 +13,23 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
 
-from .ledger import energies
+from .ledger import EnergyWatch, energies
 from .model import Model, ModelArrays
 from .results import Recorder, Result
 from .settings import RunSettings
 from .solvers import get_solver
 from .state import State, initial_state
-from .step import Stepper
+from .step import Stepper, time_step_advice
 
-__all__ = ["run"]
+__all__ = ["run", "EnergyWarning", "TimeStepWarning"]
+
+
+class EnergyWarning(UserWarning):
+    """A run whose energy ledger shows energy created (:class:`srdda.ledger.EnergyWatch`)."""
+
+
+class TimeStepWarning(UserWarning):
+    """A time step far too large for the model (:func:`srdda.step.time_step_advice`)."""
 
 
 def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[int], None] | None = None,
@@ -41,12 +49,17 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     result = Result(arrays.block_names, stepper.method.name, keep_history)
     sinks: list[Recorder] = [result, *recorders]
 
-    def record(solves: int) -> None:
-        energy = energies(stepper.terms, arrays, state)
+    def record(solves: int, energy: dict[str, float]) -> None:
         for sink in sinks:
             sink.record(arrays, state, solves, energy)
 
-    record(0)
+    advice = time_step_advice(arrays, settings)
+    if advice is not None:
+        warnings.warn(advice, TimeStepWarning, stacklevel=2)
+    energy = energies(stepper.terms, arrays, state)
+    record(0, energy)
+    # contacts must never create energy; dda0's and dda1's rotation artefacts (the paper's Tables 1-5) do
+    watch = EnergyWatch(energy) if any(t.energy_kind == "contact" for t in stepper.terms) else None
     last_step = state.step + settings.last_step_limit
     end_time = settings.end_time
     min_dt = settings.min_dt if settings.min_dt is not None else 1e-6 * settings.dt
@@ -68,10 +81,14 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
                 break
             continue
         assert outcome.state is not None
-        state = replace(outcome.state, dt_next=dt)
+        before, state = state, replace(outcome.state, dt_next=dt)
+        energy = energies(stepper.terms, arrays, state)
+        created = watch.check(energy, arrays, before, state) if watch is not None else None
+        if created is not None:
+            warnings.warn(created, EnergyWarning, stacklevel=2)
         if state.step % settings.record_every == 0 or state.step == last_step or (
                 end_time is not None and _reached(state.time, end_time, settings.dt)):
-            record(outcome.solves)
+            record(outcome.solves, energy)
         if progress is not None:
             progress(state.step)
     for sink in sinks:

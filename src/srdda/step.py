@@ -33,7 +33,7 @@ from .solvers import LinearSolver, SolverError
 from .state import State
 from .term import StepContext, StepCut, Term
 
-__all__ = ["StepOutcome", "Stepper", "model_half_height", "contact_parameters"]
+__all__ = ["StepOutcome", "Stepper", "model_half_height", "contact_parameters", "time_step_advice"]
 
 
 @dataclass(frozen=True)
@@ -62,7 +62,28 @@ def contact_parameters(arrays: ModelArrays, settings: RunSettings, w0: float) ->
     d0 = settings.contact_distance_factor * settings.max_displacement_ratio * w0
     return ContactParameters(kn, settings.shear_ratio * kn, d0, np.radians(settings.contact_angle_tolerance),
                              settings.penetration_fraction * d0, settings.friction_tolerance,
-                             settings.open_close_freeze_after, settings.open_close_settle_after)
+                             settings.open_close_freeze_after, settings.open_close_settle_after,
+                             settings.open_close_tolerance * w0)
+
+
+def time_step_advice(arrays: ModelArrays, settings: RunSettings) -> str | None:
+    """A warning when Δt is far too large for a contact model, else None (docs/reliability.md).
+
+    Shi's bound: a vertex may move g2·w0 in one step, so a block starting from
+    rest under gravity g may take steps of at most sqrt(2·g2·w0/|g|). Above ten
+    times that, the first steps are cut again and again and the run spends its
+    time finding a Δt the user could have given.
+    """
+    g = float(np.linalg.norm(arrays.gravity))
+    if not settings.contacts or arrays.n_blocks < 2 or g == 0.0:
+        return None
+    reach = settings.max_displacement_ratio * model_half_height(arrays.vertices)
+    bound = float(np.sqrt(2.0 * reach / g))
+    if settings.dt <= 10.0 * bound:
+        return None
+    return (f"dt = {settings.dt:.3g} s is far too large for this contact model: a block falling from rest moves "
+            f"g2·w0 = {reach:.3g} m (the most a step may move) in {bound:.3g} s; steps will be cut until Δt is "
+            f"near that. Give dt ≤ {bound:.2g} s (or raise max_displacement_ratio)")
 
 
 class Stepper:

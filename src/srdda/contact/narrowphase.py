@@ -131,10 +131,22 @@ def _segment_distance(X, nxt, e, x, y):
 
 
 @njit(cache=True)
+def _boundary_distance(X, block_ptr, nxt, b, x, y):
+    """Distance from (x, y) to the outline of block b."""
+    best = np.inf
+    for f in range(block_ptr[b], block_ptr[b + 1]):
+        best = min(best, _segment_distance(X, nxt, f, x, y))
+    return best
+
+
+@njit(cache=True)
 def _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
     """A vertex behind the edge line is a contact only as a real, shallow penetration.
 
-    It must lie inside block b, no deeper than ``max_depth``, and the edge must
+    It must lie inside block b (or on its outline, to 1e-6 of the edge's
+    length: a vertex that penetrated by 1e-8 m at a corner of b may be put
+    just outside the corner's other edge by rounding, and must still be
+    found), no deeper than ``max_depth``, and the edge must
     be its shortest way out: no other edge of b that v's wedge could have
     entered through (angle criterion) may be nearer. A vertex on the far side
     of a thin block is not a contact, nor is a vertex that sits on one edge near
@@ -151,9 +163,11 @@ def _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
     depth = -(dy * (x - x0) - dx * (y - y0)) / length
     if depth <= 0.0:
         return True
-    if depth > max_depth or not _inside(X, block_ptr, nxt, b, x, y):
+    if depth > max_depth:
         return False
     slack = 1e-9 * length  # rounding of distances near a vertex shared by two edges
+    if not _inside(X, block_ptr, nxt, b, x, y) and _boundary_distance(X, block_ptr, nxt, b, x, y) > 1e-6 * length:
+        return False
     for f in range(block_ptr[b], block_ptr[b + 1]):
         if f == e or _segment_distance(X, nxt, f, x, y) >= depth - slack:
             continue

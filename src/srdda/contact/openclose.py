@@ -10,8 +10,18 @@ opposing the slip), LOCKED (normal and shear springs). Shi (1988), ch. 4:
   SLIDING in the direction of s;
 * a contact that closes is LOCKED first: its normal force, which sets the
   friction of a sliding contact, is known only after a solve with it closed;
-* a SLIDING contact locks when its slip reverses (friction can stop a block,
-  never push it back) or when its slip force drops below the strength.
+* a SLIDING contact keeps its slip direction and locks only when its slip
+  reverses (friction can stop a block, never push it back).
+
+Shi's tolerance f0·w0 (``tolerance``; f0 = 2e-7 in Shi's and ntdda's codes)
+keeps the iteration short on packed models: a closed contact opens only once
+its gap exceeds f0·w0 (plus T/k_n), a slip must reverse by more than f0·w0,
+and a sliding contact's friction is re-iterated only while it is off by more
+than k_s·f0·w0. An open contact still closes at any penetration, so the band
+only ever drops spring energy, never adds it (docs/contacts.md, "Open-close
+convergence"). A contact still held closed in the band when the iteration ends
+is committed OPEN (:meth:`srdda.contact.term.ContactStep.commit`): its spring's
+energy is dropped. ``tolerance`` = 0 gives the exact rules.
 
 Two additions make impacts converge (docs/contacts.md):
 
@@ -36,30 +46,38 @@ OPEN, SLIDING, LOCKED = 0, 1, 2
 
 def next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.ndarray, kn: float, ks: float,
                 tan_phi: np.ndarray, cohesion_force: np.ndarray, tension_force: np.ndarray,
-                closed_this_step: np.ndarray, friction_normal: np.ndarray, friction_tolerance: float = 1e-3
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                closed_this_step: np.ndarray, friction_normal: np.ndarray, friction_tolerance: float = 1e-3,
+                tolerance: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """New (state, slip sign, changed, unsettled) of every contact for end-of-step gap and shear.
 
     ``unsettled``: sliding contacts whose friction used a normal force more
-    than ``friction_tolerance`` (relative) away from the solved one.
+    than ``friction_tolerance`` (relative) away from the solved one, and whose
+    friction force is off by more than k_s × ``tolerance`` (a shear spring's
+    force at the open-close length tolerance).
 
     ``closed_this_step`` marks contacts that were OPEN in an earlier solve of
     this step; ``friction_normal`` is the normal force the last solve used for
     the friction of sliding contacts.
     """
     normal = -kn * gap
-    closed = normal >= -tension_force
+    # a closed contact opens once its gap exceeds T/k_n + tolerance (Shi's f0·w0), an open one
+    # closes at any penetration (so the band never adds spring energy)
+    closed = normal >= -tension_force - np.where(state != OPEN, kn * tolerance, 0.0)
     strength = np.maximum(normal, 0.0) * tan_phi + cohesion_force
     slip = np.sign(shear).astype(np.int8)
     holds = ks * np.abs(shear) <= strength
-    reversed_slip = (state == SLIDING) & (slip != sign) & (strength > 0)
+    # a sliding contact locks only when its slip reverses by more than the tolerance (Shi), and keeps
+    # its slip direction while it slides
+    reversed_slip = (state == SLIDING) & (sign * shear < -tolerance) & (strength > 0)
+    holds = holds & (state != SLIDING)
     just_closed = state == OPEN
     glancing = (state == LOCKED) & ~closed & closed_this_step
     new_state = np.where(closed, np.where(holds | reversed_slip | just_closed, LOCKED, SLIDING), OPEN)
     new_state = np.where(glancing, SLIDING, new_state).astype(np.int8)
-    new_sign = np.where(new_state == SLIDING, slip, 0).astype(np.int8)
+    new_sign = np.where(new_state == SLIDING, np.where(state == SLIDING, sign, slip), 0).astype(np.int8)
     friction = tan_phi > 0
     changed = (new_state != state) | ((new_state == SLIDING) & (new_sign != sign) & friction)
     unsettled = (new_state == SLIDING) & (state == SLIDING) & friction & (
-        np.abs(np.maximum(normal, 0.0) - friction_normal) > friction_tolerance * np.maximum(normal, 0.0))
+        np.abs(np.maximum(normal, 0.0) - friction_normal) > friction_tolerance * np.maximum(normal, 0.0)) & (
+        np.abs(np.maximum(normal, 0.0) - friction_normal) * tan_phi > ks * tolerance)
     return new_state, new_sign, changed, unsettled

@@ -44,6 +44,7 @@ class ContactParameters:
     friction_tolerance: float = 1e-3  # relative settling of the friction normal force
     freeze_after: int = 2  # state changes of one contact in a step after which its state is kept
     settle_after: int = 8  # solves after which no contact reopens or relocks, friction is not re-iterated
+    tolerance: float = 0.0  # m, Shi's f0·w0: the open and reverse-slip bands, the settled friction displacement
 
 
 @dataclass(frozen=True)
@@ -148,7 +149,8 @@ class ContactStep:
         self.closed_this_step |= (self.state == OPEN) & (self.gap < 0)
         state, sign, changed, unsettled = next_states(self.state, self.sign, self.gap, self.shear, p.normal_stiffness,
                                            p.shear_stiffness, self.tan_phi, self.cohesion_force, self.tension_force,
-                                           self.closed_this_step, self.friction_normal, p.friction_tolerance)
+                                           self.closed_this_step, self.friction_normal, p.friction_tolerance,
+                                           p.tolerance)
         # a contact that has already changed state ``freeze_after`` times in this step keeps its state,
         # so that the iteration ends (it may carry a little tension for one step; the next step
         # starts from the actual gap). Closing a clearly penetrating contact, opening a clearly
@@ -195,7 +197,7 @@ class ContactStep:
             slope = residual - prev_residual
             ok = sliding & (np.abs(slope) > 1e-12 * np.maximum(np.abs(residual), 1e-300)) & (used != prev_used)
             step = np.where(ok, residual * (used - prev_used) / np.where(ok, slope, 1.0), 0.0)
-            nxt = np.where(ok, np.maximum(used - step, 0.0), nxt)
+            nxt = np.where(ok & (solved > 0), np.maximum(used - step, 0.0), nxt)
         self._secant = (used.copy(), residual)
         return nxt
 
@@ -203,6 +205,10 @@ class ContactStep:
     def commit(self) -> ContactSet:
         """The contacts as they ended the accepted step."""
         p = self.params
+        # a contact held closed in the open-close band (a gap below f0·w0, pulling) ends the step open:
+        # its spring's energy is dropped, never carried into the next step
+        held = (self.state != OPEN) & (p.normal_stiffness * self.gap > self.tension_force)
+        self.state = np.where(held, OPEN, self.state).astype(np.int8)
         closed = self.state != OPEN
         locked = self.state == LOCKED
         energy = 0.5 * p.normal_stiffness * float(np.sum(self.gap[closed] ** 2)) \
