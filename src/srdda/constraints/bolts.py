@@ -92,6 +92,14 @@ class BoltTerm(Term):
 
     def __init__(self, links: ConstraintArrays) -> None:
         self.links = links
+        self._broken = np.zeros(links.n_bolts, dtype=bool)  # the flags at t, carried to t + Δt by commit
+        self._break_time = np.full(links.n_bolts, np.nan)
+
+    def begin(self, ctx: StepContext) -> None:
+        """Keep the broken flags and break times of the state at t (the updated state gets them at commit)."""
+        self._broken = bolt_broken(self.links, ctx.state)
+        times = ctx.state.bolt_break_time
+        self._break_time = times if len(times) == self.links.n_bolts else np.full(self.links.n_bolts, np.nan)
 
     @property
     def at_points(self) -> bool:
@@ -128,7 +136,7 @@ class BoltTerm(Term):
 
     def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
         """The energy of the bolts that break at the end of this step leaves as ``dissipated``."""
-        bolts = bolt_forces(self.links, new)
+        bolts = BoltForces(self.links, new.points, self._broken)
         breaking = bolts.breaking(self.links)
         if not np.any(breaking):
             return None
@@ -139,7 +147,6 @@ class BoltTerm(Term):
     def commit(self, new: State) -> State:
         """Bolts whose axial force exceeds their strength at the new state break, at its time."""
         links = self.links
-        broken = bolt_broken(links, new)
-        breaking = BoltForces(links, new.points, broken).breaking(links)
-        times = new.bolt_break_time if len(new.bolt_break_time) == links.n_bolts else np.full(links.n_bolts, np.nan)
-        return replace(new, bolt_broken=broken | breaking, bolt_break_time=np.where(breaking, new.time, times))
+        breaking = BoltForces(links, new.points, self._broken).breaking(links)
+        return replace(new, bolt_broken=self._broken | breaking,
+                       bolt_break_time=np.where(breaking, new.time, self._break_time))
