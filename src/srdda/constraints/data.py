@@ -198,7 +198,8 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
     pr = np.array([add(p.block, p.point) for p in prescribed], dtype=np.int64)
     ba = np.array([add(b.block_a, b.point_a) for b in bolts], dtype=np.int64)
     bb = np.array([add(b.block_b, b.point_b) if b.block_b >= 0 else -1 for b in bolts], dtype=np.int64)
-    bolt_ends = np.array([[b.point_a, b.point_b] for b in bolts], dtype=float).reshape(-1, 2, dim)
+    head = np.array([b.point_a for b in bolts], dtype=float).reshape(-1, dim)
+    anchor = np.array([b.point_b for b in bolts], dtype=float).reshape(-1, dim)
     sep = np.array([np.asarray(s.point_a, float) - np.asarray(s.point_b, float) for s in springs]).reshape(-1, dim)
     rest = np.array([np.linalg.norm(sep[i]) if s.rest_length is None else s.rest_length
                      for i, s in enumerate(springs)], dtype=float)
@@ -234,8 +235,8 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
                                    dtype=np.int64),
         base_acceleration=base_acceleration,
         bolt_rows_a=ba, bolt_rows_b=bb,
-        bolt_ground=np.where((bb < 0)[:, None], bolt_ends[:, 1], 0.0),
-        bolt_axis=bolt_ends[:, 0] - bolt_ends[:, 1],
+        bolt_ground=np.where((bb < 0)[:, None], anchor, 0.0),
+        bolt_axis=head - anchor,
         bolt_stiffness=np.array([b.stiffness for b in bolts], dtype=float),
         bolt_pretension=np.array([b.pretension for b in bolts], dtype=float),
         bolt_strength=np.array([b.strength for b in bolts], dtype=float),
