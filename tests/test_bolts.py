@@ -191,3 +191,29 @@ def test_a_bad_bolt_is_one_error_naming_it(bolt: str, message: str):
     with pytest.raises(ModelFileError) as err:
         model_from_dict(tomllib.loads(MODEL + "[[bolts]]\n" + bolt), "m.toml")
     assert message in str(err.value)
+
+
+def test_the_model_figure_draws_the_bolts_and_the_example_loads():
+    from srdda.io.modelfile import load_model
+    from srdda.io.records import SYNTHETIC_RECORD, record_history
+    from srdda.plotting import fig_configuration
+
+    arrays = _bolted(4e4).arrays()
+    fig = fig_configuration(arrays)
+    bolt_lines = [ln for ln in fig.axes[0].get_lines() if ln.get_label() == "bolt"]
+    np.testing.assert_allclose(bolt_lines[0].get_xydata(), [[0.5, 0.0], list(ANCHOR)])
+    example = Path(__file__).resolve().parents[1] / "examples" / "records" / "quake-bolted-block.toml"
+    model, settings = load_model(example)
+    assert [b.name for b in model.bolts] == ["lower bolt", "upper bolt"] and settings.end_time == 6.5
+    expected = record_history(SYNTHETIC_RECORD, scale=1.5, baseline="linear", components="x")
+    np.testing.assert_array_equal(model.base_acceleration.table, expected.table)
+
+
+def test_a_bolt_in_3d_moves_its_extruded_block_as_in_2d():
+    k, p0, dt, n = 4e4, 500.0, 1e-3, 100
+    flat = run(_bolted(k, p0, shear=1e4), RunSettings(dt=dt, n_steps=n, method="dda0"))
+    solid = run(_bolted(k, p0, shear=1e4).extruded(1.0), RunSettings(dt=dt, n_steps=n, method="dda0",
+                                                                     contacts=False))
+    # the same discrete equations in the plane z = 0 (a unit thickness): round-off
+    np.testing.assert_allclose(solid.array("centroid")[:, 0, :2], flat.array("centroid")[:, 0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(solid.array("bolt_force"), flat.array("bolt_force"), rtol=1e-9)

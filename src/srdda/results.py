@@ -43,6 +43,10 @@ def bolt_histories(arrays: ModelArrays, state: State) -> dict[str, np.ndarray]:
     """The recorded bolt quantities of one state: axial and shear force (N; 0 once broken), broken flag,
     break time (s, nan while intact) and the two ends (n_bolts, 2, dim) of every bolt."""
     links = arrays.links
+    if not links.n_bolts:  # every model records them: keep the common case cheap
+        empty, no_end = np.zeros(0), np.zeros((0, arrays.block_type.dim))
+        return {"bolt_force": empty, "bolt_shear_force": empty, "bolt_broken": np.zeros(0, dtype=bool),
+                "bolt_break_time": empty, "bolt_ends": np.stack([no_end, no_end], axis=1)}
     bolts = bolt_forces(links, state)
     times = state.bolt_break_time if len(state.bolt_break_time) == links.n_bolts else np.full(links.n_bolts, np.nan)
     return {"bolt_force": bolts.axial, "bolt_shear_force": bolts.shear, "bolt_broken": ~bolts.intact,
