@@ -146,10 +146,12 @@ def _matches(actual: tuple[int, ...], documented: tuple[int | str, ...]) -> bool
 
 @pytest.fixture(scope="module")
 def results_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The nunchaku (a hinge, three measured points) with a block on a stick (contacts), 12 steps, flushed twice."""
+    """The nunchaku (a hinge, three measured points) with a block on a stick (contacts) hanging from a bolt,
+    12 steps, flushed twice."""
     path = tmp_path_factory.mktemp("results") / "nunchaku.h5"
     model, settings = load_model(examples_dir() / "paper" / "nunchaku.toml")
     model.add_block([[0.2, 0.05], [0.4, 0.05], [0.4, 0.15], [0.2, 0.15]], "stick", name="bob")
+    model.add_bolt([0.3, 0.1], [0.3, 1.0], 1e5, block_b=-1, name="bolt")  # the bob hangs from the ground
     settings = dataclasses.replace(settings, n_steps=12)
     result = srdda.run(model, settings, recorders=[ResultsStore(path, settings, flush_every=6)])
     assert result.completed
@@ -163,9 +165,10 @@ def test_every_history_and_contact_dataset_has_its_documented_shape(results_file
         n = len(f["history/step"])
         sizes = {"n": n, "nb": len(arrays_model["block_ptr"]) - 1, "nv": len(arrays_model["vertices"]),
                  "nm": len(arrays_model["measured_rows"]), "nμ": f["history/multipliers"].shape[1],
+                 "nbo": len(arrays_model["links.bolt_rows_a"]),
                  "ne": len(json.loads(f["history/energy"].attrs["names"])), "k": len(f["contacts/step"]),
                  "nc": int(f["contacts/offsets"][-1])}
-        assert sizes["nμ"] == 2 and sizes["k"] > 0 and sizes["nc"] > 0  # the file holds what is checked
+        assert sizes["nμ"] == 2 and sizes["k"] > 0 and sizes["nc"] > 0 and sizes["nbo"] == 1  # what is checked
         documented: dict[str, tuple[int | str, ...]] = {}
         for cell_path, shape_cell, _ in rows:
             shape = _shape(shape_cell, sizes)

@@ -14,7 +14,7 @@ from typing import Literal
 import numpy as np
 import shapely
 
-from .constraints.data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
+from .constraints.data import BoltSpec, ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
 from .history import HistoryError, MotionHistory, TimeHistory
 from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon, overlapping_pairs
 from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_polyhedron, polyhedron_covers,
@@ -190,6 +190,7 @@ class Model:
     springs: list[SpringSpec] = field(default_factory=list)
     prescribed: list[PrescribedSpec] = field(default_factory=list)
     base_acceleration: MotionHistory | None = None
+    bolts: list[BoltSpec] = field(default_factory=list)
     allow_overlap: bool = False  # True: blocks that overlap at the start are accepted (their contacts push them apart)
 
     # -- building ---------------------------------------------------------
@@ -448,6 +449,41 @@ class Model:
         self.prescribed.append(PrescribedSpec(b, p, hist, quantity, tuple(c in components for c in axes), by,
                                               None if stiffness is None else float(stiffness)))
 
+    def add_bolt(self, point_a: Sequence[float], point_b: Sequence[float], stiffness: float, pretension: float = 0.0,
+                 strength: float | None = None, shear_stiffness: float = 0.0, block_a: int | None = None,
+                 block_b: int | None = None, name: str = "") -> int:
+        """A rock bolt from ``point_a`` of a block to ``point_b`` of another block (``block_b=-1``: the ground).
+
+        ``stiffness`` axial (N/m), ``pretension`` (N), ``strength`` tensile (N;
+        None: never breaks), ``shear_stiffness`` (N/m) across the bolt; see
+        :mod:`srdda.constraints.bolts`. Returns the bolt's index.
+        """
+        what = name or f"bolt {len(self.bolts)}"
+        a, pa = self._resolve(point_a, block_a, f"{what} end a")
+        if block_b == -1:
+            pb = np.asarray(point_b, dtype=float)
+            if pb.shape != (self.dim,) or not np.all(np.isfinite(pb)):
+                raise ModelError(f"{what} end b: a point has {self.dim} finite coordinates in this {self.dim}D model")
+            b = -1
+        else:
+            b, pb = self._resolve(point_b, block_b, f"{what} end b")
+            if a == b:
+                raise ModelError(f"{what}: both ends lie in block {self.blocks[a].name!r}; a bolt joins two blocks "
+                                 "(or a block and the ground: block_b = -1, \"ground\" in a model file)")
+        for label, value, low in (("stiffness", stiffness, "> 0"), ("pretension", pretension, ">= 0"),
+                                  ("shear_stiffness", shear_stiffness, ">= 0")):
+            if not (np.isfinite(value) and (value > 0 if low == "> 0" else value >= 0)):
+                raise ModelError(f"{what}: {label} must be finite and {low}, got {value}")
+        if strength is not None and not 0 < strength:
+            raise ModelError(f"{what}: strength must be > 0 (N), got {strength}")
+        if np.allclose(pa, pb):
+            raise ModelError(f"{what}: its two ends coincide; a bolt needs a length")
+        if strength is not None and pretension > strength:
+            raise ModelError(f"{what}: the pretension {pretension} N exceeds the strength {strength} N")
+        self.bolts.append(BoltSpec(a, pa, b, pb, float(stiffness), float(pretension),
+                                   np.inf if strength is None else float(strength), float(shear_stiffness), what))
+        return len(self.bolts) - 1
+
     def set_base_acceleration(self, history: object) -> None:
         """Ground acceleration a_g(t) (m/s²), applied as the body force -ρ·a_g on every block."""
         try:
@@ -502,6 +538,7 @@ class Model:
                                   components=(*p.components, False)) for p in self.prescribed]
         if self.base_acceleration is not None:
             out.base_acceleration = self.base_acceleration.padded(SOLID.dim)
+        out.bolts = [replace(b, point_a=at(b.point_a), point_b=at(b.point_b)) for b in self.bolts]
         return out
 
     # -- compiling ---------------------------------------------------------
@@ -536,7 +573,7 @@ class Model:
         rows = [np.arange(offsets[i], offsets[i + 1]) for i in range(5)]
         pts = np.array([p for g in groups for p in g], dtype=float).reshape(-1, bt.dim)
         link_pts, link_owners, links = compile_links(self.hinges, self.springs, self.prescribed,
-                                                     self.base_acceleration, len(pts), bt.dim)
+                                                     self.base_acceleration, len(pts), bt.dim, self.bolts)
         pts = np.concatenate([pts, link_pts])
         block_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         if bt is SOLID:

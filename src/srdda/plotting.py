@@ -34,7 +34,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 __all__ = ["history", "quantity_names", "block_values", "method_label", "plot_blocks", "fig_configuration",
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
-           "fig_trajectories", "fig_time_series",
+           "fig_trajectories", "fig_time_series", "plot_bolts", "fig_bolt_forces",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index"]
 
 Results = Any  # Result or StoredResult: both have .array(name), .block_names, .method
@@ -78,7 +78,8 @@ def history(res: Results, name: str) -> np.ndarray:
 
 def quantity_names(res: Results) -> list[str]:
     """Every name :func:`history` accepts for ``res``."""
-    return (["area", "rotation", "iterations"] + [f"velocity.{c}" for c in VELOCITY_COMPONENTS]
+    return (["area", "rotation", "iterations", "bolt_force", "bolt_shear_force"]
+            + [f"velocity.{c}" for c in VELOCITY_COMPONENTS]
             + [f"stress.{c}" for c in STRESS_COMPONENTS] + [f"energy.{e}" for e in _energy_names(res)]
             + [f"{v}.{c}" for v in ("centroid", "measured_position", "measured_velocity") for c in XY])
 
@@ -144,6 +145,12 @@ def fig_configuration(arrays: Any, title: str = "", labels: Sequence[str] | None
         ax.plot(*pts[springs].T, "o", mfc="none", mec="tab:green", ms=7, label="spring end")
     if len(arrays.load_rows):
         ax.plot(*pts[arrays.load_rows].T, "v", color="tab:orange", ms=7, label="point load")
+    links = arrays.links
+    if links.n_bolts:
+        rb = links.bolt_rows_b
+        ends = np.stack([pts[links.bolt_rows_a], np.where((rb >= 0)[:, None], pts[np.maximum(rb, 0)],
+                                                          links.bolt_ground)], axis=1)
+        plot_bolts(ax, ends, np.zeros(links.n_bolts, dtype=bool), label="bolt")
     mr = arrays.measured_rows
     if len(mr):
         ax.plot(*pts[mr].T, "o", color="tab:red", ms=4, label="measured point")
@@ -184,11 +191,46 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
         fig.colorbar(coll, ax=ax, label=color, shrink=0.7)
     if trails:
         _trails(ax, res, index)
+    if "bolt_ends" in res.histories and res.bolt_ends.shape[1]:
+        plot_bolts(ax, res.bolt_ends[index], res.bolt_broken[index], res.bolt_force[index])
     allv = verts.reshape(-1, 2)
     pad = 0.05 * float(np.ptp(allv, axis=0).max() or 1.0)
     ax.set_xlim(allv[:, 0].min() - pad, allv[:, 0].max() + pad)
     ax.set_ylim(allv[:, 1].min() - pad, allv[:, 1].max() + pad)
     ax.set(xlabel="x (m)", ylabel="y (m)", title=step_title(res, index))
+    return fig
+
+
+def plot_bolts(ax: plt.Axes, ends: np.ndarray, broken: np.ndarray, force: np.ndarray | None = None,
+               label: str | None = None) -> None:
+    """Rock bolts as lines from end a to end b (``ends`` (n, 2, 2)): intact solid red with the axial force
+    written at their middle (kN per m when ``force`` is given), broken dashed grey."""
+    broken = np.asarray(broken, dtype=bool)
+    for k, (a, b) in enumerate(np.asarray(ends)[:, :, :2]):
+        style = dict(color="0.5", ls="--") if broken[k] else dict(color="tab:red", ls="-")
+        ax.plot([a[0], b[0]], [a[1], b[1]], lw=2.0, marker="o", ms=3, label=label if k == 0 else None, **style)
+        if force is not None:
+            ax.annotate("broken" if broken[k] else f"{force[k] / 1e3:.3g} kN", 0.5 * (a + b), xytext=(3, 3),
+                        textcoords="offset points", fontsize=7, color=style["color"])
+
+
+def fig_bolt_forces(res: Results) -> Figure:
+    """Axial force of every bolt against time (kN, per m in 2D), each break marked by a cross."""
+    t = history(res, "time")
+    force = history(res, "bolt_force")
+    if force.ndim != 2 or not force.shape[1]:
+        raise ValueError("the run has no rock bolts")
+    broken = history(res, "bolt_broken").astype(bool)
+    names = tuple(getattr(res, "bolt_names", ())) or tuple(f"bolt {k}" for k in range(force.shape[1]))
+    fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
+    for k in range(force.shape[1]):
+        line, = ax.plot(t, force[:, k] / 1e3, label=names[k])
+        if broken[:, k].any():
+            i = int(np.argmax(broken[:, k]))
+            ax.plot(t[i], force[max(i - 1, 0), k] / 1e3, "x", color=line.get_color(), ms=9)
+    ax.set(xlabel="time (s)", ylabel="axial force (kN)", title=f"{method_label(res.method)}: bolt forces")
+    if force.shape[1] <= MAX_LEGEND:
+        ax.legend(fontsize="small")
     return fig
 
 
@@ -278,7 +320,8 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
             raise ValueError(f"{quantity} is a vector per block or point: plot {quantity}.x, {quantity}.y, ... "
                              "or use fig_trajectories")
         names = ([f"point {k}" for k in range(y.shape[1])] if quantity.startswith("measured_")
-                 else res.block_names)
+                 else (getattr(res, "bolt_names", ()) or [f"bolt {k}" for k in range(y.shape[1])])
+                 if quantity.startswith("bolt_") else res.block_names)
         for b in (range(y.shape[1]) if blocks is None else blocks):
             ax.plot(t, y[:, b], label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
     ax.set(xlabel="time (s)", ylabel=quantity)

@@ -15,10 +15,11 @@ from typing import Protocol
 
 import numpy as np
 
+from .constraints.bolts import bolt_forces
 from .model import ModelArrays
 from .state import State
 
-__all__ = ["Recorder", "Result", "measured_points"]
+__all__ = ["Recorder", "Result", "measured_points", "bolt_histories"]
 
 
 class Recorder(Protocol):
@@ -38,8 +39,24 @@ def measured_points(arrays: ModelArrays, state: State) -> tuple[np.ndarray, np.n
     return state.points[mr].copy(), np.einsum("nij,nj->ni", T, state.velocity[blocks])
 
 
+def bolt_histories(arrays: ModelArrays, state: State) -> dict[str, np.ndarray]:
+    """The recorded bolt quantities of one state: axial and shear force (N; 0 once broken), broken flag,
+    break time (s, nan while intact) and the two ends (n_bolts, 2, dim) of every bolt."""
+    links = arrays.links
+    if not links.n_bolts:  # every model records them: keep the common case cheap
+        empty, no_end = np.zeros(0), np.zeros((0, arrays.block_type.dim))
+        return {"bolt_force": empty, "bolt_shear_force": empty, "bolt_broken": np.zeros(0, dtype=bool),
+                "bolt_break_time": empty, "bolt_ends": np.stack([no_end, no_end], axis=1)}
+    bolts = bolt_forces(links, state)
+    times = state.bolt_break_time if len(state.bolt_break_time) == links.n_bolts else np.full(links.n_bolts, np.nan)
+    return {"bolt_force": bolts.axial, "bolt_shear_force": bolts.shear, "bolt_broken": ~bolts.intact,
+            "bolt_break_time": np.array(times, dtype=float), "bolt_ends": np.stack([bolts.end_a, bolts.end_b], axis=1)}
+
+
+BOLT_HISTORIES = ("bolt_force", "bolt_shear_force", "bolt_broken", "bolt_break_time", "bolt_ends")
 _HISTORIES = ("step", "time", "centroid", "area", "rotation", "velocity", "stress", "measured_position",
-              "measured_velocity", "energy", "iterations", "multipliers", "closed_contacts", "max_penetration")
+              "measured_velocity", "energy", "iterations", "multipliers", "closed_contacts", "max_penetration",
+              *BOLT_HISTORIES)
 
 
 @dataclass
@@ -66,6 +83,12 @@ class Result:
     multipliers: list[np.ndarray] = field(default_factory=list)  # μ per step; force on point a = -μ (N/m)
     closed_contacts: list[int] = field(default_factory=list)  # closed (sliding or locked) contacts
     max_penetration: list[float] = field(default_factory=list)  # deepest closed contact (m)
+    bolt_force: list[np.ndarray] = field(default_factory=list)  # axial force per bolt (N/m in 2D), 0 once broken
+    bolt_shear_force: list[np.ndarray] = field(default_factory=list)  # |dowel force| per bolt
+    bolt_broken: list[np.ndarray] = field(default_factory=list)  # bool per bolt
+    bolt_break_time: list[np.ndarray] = field(default_factory=list)  # s, nan while intact
+    bolt_ends: list[np.ndarray] = field(default_factory=list)  # (n_bolts, 2, dim) m
+    bolt_names: tuple[str, ...] = ()
     status: str = "running"
     final_state: State | None = None
 
@@ -91,7 +114,9 @@ class Result:
         row = (state.step, state.time, mom.centroid, mom.volume, state.rotation.copy(), state.velocity.copy(),
                state.stress.copy(), pos, vel, dict(energy), solves, state.multipliers.copy(),
                0 if contacts is None else int(np.count_nonzero(contacts.closed)),
-               0.0 if contacts is None else contacts.max_penetration)
+               0.0 if contacts is None else contacts.max_penetration,
+               *bolt_histories(arrays, state).values())
+        self.bolt_names = arrays.links.bolt_names
         for name, value in zip(_HISTORIES, row):
             getattr(self, name).append(value)
 

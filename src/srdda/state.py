@@ -36,6 +36,8 @@ class State:
     ledger: np.ndarray = field(default_factory=lambda: np.zeros(len(LEDGER)))  # cumulative work, see LEDGER
     contacts: ContactSet | None = None  # contacts as the step that led here ended them
     dt_next: float | None = None  # the step-size control's Δt for the next step (None: the run's dt)
+    bolt_broken: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))  # (n_bolts,)
+    bolt_break_time: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (n_bolts,) s, nan while intact
 
 
 def mass_density(arrays: ModelArrays, moments: BlockMoments) -> np.ndarray:
@@ -61,5 +63,7 @@ def initial_state(arrays: ModelArrays, method: Method) -> State:
     acc[arrays.block_fixed] = 0.0
     velocity = arrays.velocity.copy()
     velocity[arrays.block_fixed] = 0.0
+    n_bolts = arrays.links.n_bolts
     return State(0, 0.0, arrays.vertices.copy(), arrays.points.copy(), velocity, acc, arrays.stress.copy(),
-                 bt.initial_rotation(arrays.n_blocks), mom, np.zeros(arrays.links.n_multipliers))
+                 bt.initial_rotation(arrays.n_blocks), mom, np.zeros(arrays.links.n_multipliers),
+                 bolt_broken=np.zeros(n_bolts, dtype=bool), bolt_break_time=np.full(n_bolts, np.nan))

@@ -1,5 +1,5 @@
 """Constraints and driven boundaries: fixed points, point loads, springs with dashpots, hinges and pins by
-Lagrange multipliers, prescribed motion (penalty or multipliers), base acceleration.
+Lagrange multipliers, prescribed motion (penalty or multipliers), base acceleration, rock bolts.
 
 ``point_terms(arrays, penalty)`` gives the step terms (:class:`srdda.term.Term`)
 a model's points need. See docs/constraints.md.
@@ -10,7 +10,8 @@ from typing import TYPE_CHECKING
 
 from ..history import HistoryError, MotionHistory
 from ..term import Term
-from .data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec
+from .bolts import BoltTerm, bolt_forces
+from .data import BoltSpec, ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec
 from .lagrange import LagrangeTerm, hinge_forces
 from .loads import PointLoadTerm
 from .prescribed import BaseAccelerationTerm, PrescribedPenaltyTerm
@@ -19,13 +20,13 @@ from .springs import SpringTerm
 if TYPE_CHECKING:
     from ..model import ModelArrays
 
-__all__ = ["ConstraintArrays", "HingeSpec", "PrescribedSpec", "SpringSpec", "MotionHistory", "HistoryError",
+__all__ = ["ConstraintArrays", "HingeSpec", "PrescribedSpec", "SpringSpec", "BoltSpec", "BoltTerm", "bolt_forces", "MotionHistory", "HistoryError",
            "LagrangeTerm", "SpringTerm", "PointLoadTerm", "PrescribedPenaltyTerm", "BaseAccelerationTerm",
            "hinge_forces", "point_terms"]
 
 
 def point_terms(arrays: ModelArrays, penalty: float) -> list[Term]:
-    """The terms of the model's fixed points, springs, loads, hinges, driven points and base acceleration."""
+    """The terms of the model's fixed points, springs, loads, hinges, driven points, base acceleration and bolts."""
     links = arrays.links
     terms: list[Term] = []
     if len(arrays.fixed_rows) or len(arrays.spring_rows_a) or len(links.spring_rows_a):
@@ -38,4 +39,6 @@ def point_terms(arrays: ModelArrays, penalty: float) -> list[Term]:
         terms.append(PrescribedPenaltyTerm(links, penalty))
     if links.base_acceleration is not None:
         terms.append(BaseAccelerationTerm(links))
+    if links.n_bolts:
+        terms.append(BoltTerm(links))
     return terms

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..history import MotionHistory
 
-__all__ = ["HingeSpec", "SpringSpec", "PrescribedSpec", "ConstraintArrays", "compile_links", "links_to_flat",
+__all__ = ["HingeSpec", "SpringSpec", "PrescribedSpec", "BoltSpec", "ConstraintArrays", "compile_links", "links_to_flat",
            "links_from_flat"]
 
 
@@ -74,6 +74,27 @@ class PrescribedSpec:
     stiffness: float | None = None
 
 
+@dataclass(frozen=True)
+class BoltSpec:
+    """A rock bolt from ``point_a`` of ``block_a`` to ``point_b`` of ``block_b`` (-1: the ground, fixed in space).
+
+    ``stiffness`` axial (N/m), ``pretension`` (N, the axial force at
+    installation), ``strength`` the tensile force (N) beyond which it breaks
+    for good (inf: never), ``shear_stiffness`` (N/m) across its initial axis
+    (dowel action). See :mod:`srdda.constraints.bolts`.
+    """
+
+    block_a: int
+    point_a: np.ndarray
+    block_b: int
+    point_b: np.ndarray
+    stiffness: float
+    pretension: float = 0.0
+    strength: float = np.inf
+    shear_stiffness: float = 0.0
+    name: str = ""
+
+
 def _rows() -> np.ndarray:
     return np.zeros(0, dtype=np.int64)
 
@@ -109,11 +130,25 @@ class ConstraintArrays:
     prescribed_sources: tuple[tuple[MotionHistory, int], ...] = ()  # distinct (history, order) pairs
     prescribed_source: np.ndarray = field(default_factory=_rows)  # source of each prescribed point
     base_acceleration: MotionHistory | None = None
+    bolt_rows_a: np.ndarray = field(default_factory=_rows)
+    bolt_rows_b: np.ndarray = field(default_factory=_rows)  # -1: end b on the ground (at bolt_ground)
+    bolt_ground: np.ndarray | None = None  # (n, dim) where end b is when it is on the ground
+    bolt_axis: np.ndarray | None = None  # (n, dim) initial separation x_a - x_b
+    bolt_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    bolt_pretension: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    bolt_strength: np.ndarray = field(default_factory=lambda: np.zeros(0))  # inf: never breaks
+    bolt_shear_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    bolt_names: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        for name, dtype in (("spring_offset", float), ("prescribed_mask", bool)):
+        for name, dtype in (("spring_offset", float), ("prescribed_mask", bool), ("bolt_ground", float),
+                            ("bolt_axis", float)):
             if getattr(self, name) is None:
                 object.__setattr__(self, name, np.zeros((0, self.dim), dtype=dtype))
+
+    @property
+    def n_bolts(self) -> int:
+        return len(self.bolt_rows_a)
 
     @property
     def n_hinges(self) -> int:
@@ -144,7 +179,7 @@ class ConstraintArrays:
 
 
 def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed: list[PrescribedSpec],
-                  base_acceleration: MotionHistory | None, first_row: int, dim: int
+                  base_acceleration: MotionHistory | None, first_row: int, dim: int, bolts: list[BoltSpec] = ()
                   ) -> tuple[np.ndarray, np.ndarray, ConstraintArrays]:
     """Points (n, dim), their blocks (n,) and the arrays of all links; point rows start at ``first_row``."""
     pts: list[np.ndarray] = []
@@ -161,6 +196,10 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
     sa = np.array([add(s.block_a, s.point_a) for s in springs], dtype=np.int64)
     sb = np.array([add(s.block_b, s.point_b) for s in springs], dtype=np.int64)
     pr = np.array([add(p.block, p.point) for p in prescribed], dtype=np.int64)
+    ba = np.array([add(b.block_a, b.point_a) for b in bolts], dtype=np.int64)
+    bb = np.array([add(b.block_b, b.point_b) if b.block_b >= 0 else -1 for b in bolts], dtype=np.int64)
+    head = np.array([b.point_a for b in bolts], dtype=float).reshape(-1, dim)
+    anchor = np.array([b.point_b for b in bolts], dtype=float).reshape(-1, dim)
     sep = np.array([np.asarray(s.point_a, float) - np.asarray(s.point_b, float) for s in springs]).reshape(-1, dim)
     rest = np.array([np.linalg.norm(sep[i]) if s.rest_length is None else s.rest_length
                      for i, s in enumerate(springs)], dtype=float)
@@ -195,6 +234,14 @@ def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed
         prescribed_source=np.array([keys.index((id(p.history), order)) for p, order in zip(prescribed, orders)],
                                    dtype=np.int64),
         base_acceleration=base_acceleration,
+        bolt_rows_a=ba, bolt_rows_b=bb,
+        bolt_ground=np.where((bb < 0)[:, None], anchor, 0.0),
+        bolt_axis=head - anchor,
+        bolt_stiffness=np.array([b.stiffness for b in bolts], dtype=float),
+        bolt_pretension=np.array([b.pretension for b in bolts], dtype=float),
+        bolt_strength=np.array([b.strength for b in bolts], dtype=float),
+        bolt_shear_stiffness=np.array([b.shear_stiffness for b in bolts], dtype=float),
+        bolt_names=tuple(b.name for b in bolts),
     )
     return np.array(pts, dtype=float).reshape(-1, dim), np.array(owners, dtype=np.int64), links
 
@@ -205,7 +252,7 @@ def links_to_flat(links: ConstraintArrays) -> tuple[dict[str, np.ndarray], dict[
     A history given as a Python callable becomes None (a file cannot hold it).
     """
     arrays = {f.name: getattr(links, f.name) for f in fields(links) if isinstance(getattr(links, f.name), np.ndarray)}
-    meta = {"hinge_names": list(links.hinge_names),
+    meta = {"hinge_names": list(links.hinge_names), "bolt_names": list(links.bolt_names),
             "sources": [h.to_json() for h, _ in links.prescribed_sources],
             "base_acceleration": (None if links.base_acceleration is None else links.base_acceleration.to_json()),
             "has_base_acceleration": links.base_acceleration is not None}
@@ -225,5 +272,6 @@ def links_from_flat(arrays: dict[str, np.ndarray], meta: dict) -> ConstraintArra
     base = meta["base_acceleration"]
     kwargs = {name: np.asarray(value) for name, value in arrays.items()}
     return ConstraintArrays(dim=kwargs["prescribed_mask"].shape[1], **kwargs, hinge_names=tuple(meta["hinge_names"]),
+                            bolt_names=tuple(meta.get("bolt_names", ())),
                             prescribed_histories=tuple(hists[i] for i in source), prescribed_sources=sources,
                             base_acceleration=None if base is None else MotionHistory.from_json(base))

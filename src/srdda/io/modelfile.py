@@ -21,7 +21,8 @@ from ..geometry.polygon import PolygonError
 from ..geometry.polyhedron import PolyhedronError, box
 from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..settings import RunSettings
-from .schema import BlockSection, HistorySection, ModelFile
+from .records import RecordError, record_history
+from .schema import BaseAccelerationSection, BlockSection, HistorySection, ModelFile
 
 __all__ = ["ModelFileError", "load_model", "read_model_text", "model_from_dict", "save_model", "model_to_dict",
            "format_validation"]
@@ -68,21 +69,26 @@ def _block_index(ref: str | int | None, names: dict[str, int], n: int, where: st
     return names[ref]
 
 
-def model_from_dict(data: dict[str, Any], source: str = "model") -> tuple[Model, RunSettings]:
-    """Validate a model-file dictionary and build the model and its run settings."""
+def model_from_dict(data: dict[str, Any], source: str = "model", base_dir: str | Path | None = None
+                    ) -> tuple[Model, RunSettings]:
+    """Validate a model-file dictionary and build the model and its run settings.
+
+    ``base_dir``: the folder that relative file names (earthquake records) are
+    relative to (default: the current directory).
+    """
     try:
         spec = ModelFile.model_validate(data)
     except ValidationError as exc:
         raise ModelFileError(format_validation(exc, source)) from None
     try:
-        return _build(spec, source)
+        return _build(spec, source, Path(base_dir) if base_dir is not None else Path())
     except (ModelError, PolygonError, ValueError) as exc:
         if isinstance(exc, ModelFileError):
             raise
         raise ModelFileError(f"{source}: {exc}") from None
 
 
-def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
+def _build(spec: ModelFile, source: str, base_dir: Path) -> tuple[Model, RunSettings]:
     model = Model(gravity=spec.gravity, allow_overlap=spec.allow_overlap)
     for name, m in spec.materials.items():
         model.add_material(name, Material(m.density, m.young, m.poisson, m.plane))
@@ -120,6 +126,8 @@ def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
         for i, mp in enumerate(spec.measured_points):
             model.add_measured_point(mp.at, _block_index(mp.block, names, n, where("measured_points", i)))
         _add_links(model, spec, names, n, where)
+        if spec.base_acceleration is not None:
+            model.set_base_acceleration(_base_acceleration(spec.base_acceleration, model.dim, base_dir, source))
     except ModelError as exc:
         raise ModelFileError(f"{source}: {exc}") from None
     return model, spec.run
@@ -178,8 +186,32 @@ def _add_links(model: Model, spec: ModelFile, names: dict[str, int], n: int, whe
         w = where("prescribed_motion", i)
         model.add_prescribed_motion(pm.at, _history(pm.history, w), pm.quantity, pm.components, pm.by, pm.stiffness,
                                     _block_index(pm.block, names, n, w))
-    if spec.base_acceleration is not None:
-        model.set_base_acceleration(_history(spec.base_acceleration, "base_acceleration"))
+    for i, b in enumerate(spec.bolts):
+        w = where("bolts", i)
+        ground = b.block_b == "ground"
+        model.add_bolt(b.a, b.b, b.stiffness, b.pretension, b.strength, b.shear_stiffness,
+                       _block_index(b.block_a, names, n, w), -1 if ground else _block_index(b.block_b, names, n, w),
+                       b.name or f"bolt {i}")
+
+
+def _base_acceleration(section: BaseAccelerationSection, dim: int, base_dir: Path, source: str) -> MotionHistory:
+    """The ground acceleration: a record file (srdda.io.records) or a history."""
+    record_options = {"format": None, "units": None, "scale": 1.0, "baseline": "none", "components": None}
+    if section.record is None:
+        given = [k for k, default in record_options.items() if getattr(section, k) != default]
+        if given:
+            raise ModelFileError(f"{source}: base_acceleration: {', '.join(given)} apply to a record; give "
+                                 "'record' (an .AT2 or .csv file) or leave them out")
+        return _history(section, "base_acceleration")
+    if any(v is not None for v in (section.constant, section.table, section.amplitude)):
+        raise ModelFileError(f"{source}: base_acceleration: give either 'record' or a history (constant, table, "
+                             "amplitude), not both")
+    path = Path(section.record)
+    try:
+        return record_history(path if path.is_absolute() else base_dir / path, dim, section.format, section.units,
+                              section.scale, section.baseline, section.components)
+    except RecordError as exc:
+        raise ModelFileError(f"{source}: base_acceleration.record: {exc}") from None
 
 
 def _history_dict(h: MotionHistory, what: str) -> dict[str, Any]:
@@ -216,6 +248,11 @@ def _links_dict(model: Model) -> dict[str, Any]:
             for p in model.prescribed]
     if model.base_acceleration is not None:
         out["base_acceleration"] = _history_dict(model.base_acceleration, "base acceleration")
+    if model.bolts:
+        out["bolts"] = [{"a": _pt(b.point_a), "b": _pt(b.point_b), "block_a": b.block_a,
+                         "block_b": "ground" if b.block_b < 0 else b.block_b, "stiffness": b.stiffness,
+                         "pretension": b.pretension, "shear_stiffness": b.shear_stiffness, "name": b.name,
+                         **({} if math.isinf(b.strength) else {"strength": b.strength})} for b in model.bolts]
     return out
 
 
@@ -247,7 +284,7 @@ def load_model(path: str | Path) -> tuple[Model, RunSettings]:
         raise ModelFileError(f"{p}: not valid TOML ({exc})") from None
     except RecursionError:
         raise ModelFileError(f"{p}: not valid TOML (arrays or tables nested too deeply)") from None
-    return model_from_dict(data, str(p))
+    return model_from_dict(data, str(p), p.parent)
 
 
 def _pt(p: np.ndarray) -> list[float]:

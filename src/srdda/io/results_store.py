@@ -65,7 +65,7 @@ from ..constraints.data import links_from_flat, links_to_flat
 from ..geometry.polyhedron import PolyhedronMesh
 from ..model import Load, Model, ModelArrays
 from ..ledger import ENERGY_NAMES
-from ..results import Result, measured_points
+from ..results import Result, bolt_histories, measured_points
 from ..settings import RunSettings
 from ..simulation import run
 from ..state import State, initial_state
@@ -423,6 +423,7 @@ class ResultsStore:
                "energy": np.array([energy[k] for k in ENERGY_NAMES]), "iterations": np.int64(solves)}
         if arrays.links.n_multipliers:  # constraint forces, one row per step (srdda.constraints)
             row["multipliers"] = state.multipliers
+        row.update(bolt_histories(arrays, state))  # rock bolts: forces, broken flags, ends
         for name, value in row.items():
             self._buffer.setdefault(name, []).append(np.array(value, copy=True))
         if self.contact_provider is not None and state.step % self.contact_every == 0:
@@ -717,6 +718,7 @@ class StoredResult:
     contacts: dict[str, np.ndarray]
     model_text: str | None
     versions: dict[str, str]
+    bolt_names: tuple[str, ...] = ()
 
     @property
     def mesh(self) -> PolyhedronMesh | None:
@@ -772,7 +774,8 @@ def read_results(path: str | Path, names: Sequence[str] | None = None) -> Stored
             block_material=g["block_material"][()], block_fixed=g["block_fixed"][()],
             initial_vertices=g["vertices"][()], contacts=contacts,
             model_text=str(g.attrs["model_text"]) if "model_text" in g.attrs else None,
-            versions={k: str(v) for k, v in f["versions"].attrs.items()})
+            versions={k: str(v) for k, v in f["versions"].attrs.items()},
+            bolt_names=tuple(json.loads(g.attrs["links"]).get("bolt_names", ())) if "links" in g.attrs else ())
 
 
 def load_checkpoint(path: str | Path, arrays: ModelArrays) -> State:

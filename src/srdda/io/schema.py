@@ -15,7 +15,8 @@ from ..units import to_si
 
 __all__ = ["ModelFile", "MaterialSection", "BlockSection", "PointRef", "FixedPointSection",
            "PointLoadSection", "PointSpringSection", "MeasuredPointSection", "JointMaterialSection",
-           "HingeSection", "PinSection", "SpringSection", "HistorySection", "PrescribedMotionSection"]
+           "HingeSection", "PinSection", "SpringSection", "HistorySection", "PrescribedMotionSection",
+           "BaseAccelerationSection", "BoltSection"]
 
 
 def _unit(kind: str) -> BeforeValidator:
@@ -145,6 +146,31 @@ class PrescribedMotionSection(PointRef):
     stiffness: Stiffness | None = Field(None, gt=0)
 
 
+class BaseAccelerationSection(HistorySection):
+    """Ground acceleration (m/s²): a history, or an earthquake record file (srdda.io.records)."""
+
+    record: str | None = None  # an .AT2 or .csv file, relative to the model file's folder
+    format: Literal["at2", "csv"] | None = None  # default: by the file's extension
+    units: Literal["g", "m/s2", "cm/s2"] | None = None  # default: .AT2 header's (g), m/s2 for CSV
+    scale: float = 1.0
+    baseline: Literal["none", "mean", "linear", "quadratic"] = "none"
+    components: Literal["x", "y", "z", "xy", "xz", "yz", "xyz"] | None = None  # axes of the record's columns
+
+
+class BoltSection(_Strict):
+    """A rock bolt from point ``a`` of block_a to point ``b`` of block_b or the ground (srdda.constraints.bolts)."""
+
+    a: Point
+    b: Point
+    block_a: str | int | None = None
+    block_b: str | int | None = None  # "ground": b is fixed in space
+    stiffness: Stiffness = Field(gt=0)  # axial, N/m
+    pretension: float = Field(0.0, ge=0)  # N
+    strength: float | None = Field(None, gt=0)  # tensile strength, N; None: never breaks
+    shear_stiffness: Stiffness = Field(0.0, ge=0)  # N/m across the bolt
+    name: str = ""
+
+
 class ModelFile(_Strict):
     """The whole model file."""
 
@@ -164,4 +190,5 @@ class ModelFile(_Strict):
     pins: list[PinSection] = []
     springs: list[SpringSection] = []
     prescribed_motion: list[PrescribedMotionSection] = []
-    base_acceleration: HistorySection | None = None
+    base_acceleration: BaseAccelerationSection | None = None
+    bolts: list[BoltSection] = []

@@ -6,8 +6,10 @@ needs) with cell data ``block``, ``material``, ``fixed``, ``velocity`` (vx, vy,
 σy, τxy), ``area`` and ``area_change`` (A/A0 - 1). Contacts are vertex cells
 at the contact point, or line cells from the point to its partner point when
 one is given, with ``normal_force``, ``shear_force``, ``normal`` and any other
-per-contact array. A step without contacts gives a valid empty VTU (written as
-ASCII: ParaView reads it, meshio's reader does not read empty meshes).
+per-contact array. Rock bolts are line cells from end a to end b with
+``axial_force``, ``shear_force``, ``broken`` and ``bolt`` (its index). A step
+without contacts gives a valid empty VTU (written as ASCII: ParaView reads it,
+meshio's reader does not read empty meshes).
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ from ..geometry.polyhedron import PolyhedronMesh
 from ..kinematics.blocktype import SOLID
 from .results_store import StoredResult, read_results
 
-__all__ = ["blocks_mesh", "solid_blocks_mesh", "contacts_mesh", "write_pvd", "write_vtu_series"]
+__all__ = ["blocks_mesh", "solid_blocks_mesh", "contacts_mesh", "bolts_mesh", "write_pvd", "write_vtu_series"]
 
 
 def _xyz(xy: np.ndarray) -> np.ndarray:
@@ -130,6 +132,18 @@ def contacts_mesh(contacts: Mapping[str, np.ndarray]) -> meshio.Mesh:
     return meshio.Mesh(points, cells, cell_data=data)
 
 
+def bolts_mesh(ends: np.ndarray, axial_force: np.ndarray, shear_force: np.ndarray, broken: np.ndarray
+               ) -> meshio.Mesh:
+    """Rock bolts of one step as line cells from end a to end b (``ends`` (n, 2, dim)) with their forces."""
+    ends = np.asarray(ends, dtype=float)
+    n, dim = len(ends), ends.shape[-1]
+    points = ends.reshape(-1, dim)
+    points = _xyz(points) if dim == 2 else points
+    data = {"bolt": [np.arange(n, dtype=np.int64)], "axial_force": [np.asarray(axial_force, dtype=float)],
+            "shear_force": [np.asarray(shear_force, dtype=float)], "broken": [np.asarray(broken).astype(np.uint8)]}
+    return meshio.Mesh(points, [("line", np.arange(2 * n).reshape(n, 2))], cell_data=data)
+
+
 def _write(mesh: meshio.Mesh, path: Path) -> None:
     empty = sum(len(c.data) for c in mesh.cells) == 0
     meshio.write(path, mesh, file_format="vtu", binary=not empty)
@@ -156,7 +170,7 @@ def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, 
     ``contacts(i)`` may give the contact arrays of recorded step ``i``; by
     default the contacts stored in the results file are used (at the steps
     they were recorded). Returns the PVD paths (``blocks``, and ``contacts``
-    when there are any).
+    when there are any, ``bolts`` for a model with rock bolts).
     """
     res = results if isinstance(results, StoredResult) else read_results(results)
     if every < 1:
@@ -171,6 +185,8 @@ def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, 
     area0 = res.area[0]
     solids = res.mesh
     block_files, contact_files, block_times, contact_times = [], [], [], []
+    bolt_files = []
+    has_bolts = "bolt_ends" in res.histories and res.bolt_ends.shape[1] > 0
     for i in sorted({*range(0, len(res.step), every), len(res.step) - 1}):
         name = f"{prefix}_{int(res.step[i]):07d}.vtu"
         if solids is not None:
@@ -182,6 +198,11 @@ def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, 
         _write(mesh, out / name)
         block_files.append(name)
         block_times.append(res.time[i])
+        if has_bolts:
+            bname = f"bolts_{int(res.step[i]):07d}.vtu"
+            _write(bolts_mesh(res.bolt_ends[i], res.bolt_force[i], res.bolt_shear_force[i], res.bolt_broken[i]),
+                   out / bname)
+            bolt_files.append(bname)
         c = contacts(i) if contacts is not None else None
         if c is not None:
             cname = f"contacts_{int(res.step[i]):07d}.vtu"
@@ -191,4 +212,6 @@ def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, 
     pvds = {"blocks": write_pvd(out / f"{prefix}.pvd", block_files, block_times)}
     if contact_files:
         pvds["contacts"] = write_pvd(out / "contacts.pvd", contact_files, contact_times)
+    if bolt_files:
+        pvds["bolts"] = write_pvd(out / "bolts.pvd", bolt_files, block_times)
     return pvds
