@@ -1,0 +1,595 @@
+"""3D block cutting: convex domains split by joint planes and finite discs.
+
+A domain is one convex polyhedron or several (a non-convex domain is given as
+convex parts; their common faces stay block boundaries). Every joint, an
+infinite plane or a disc (:class:`~srdda.geometry.jointsets3d.JointPlanes`),
+splits the convex fragments it crosses into two convex fragments. The split
+of one convex polyhedron by a plane is exact and local (a numba kernel, no
+Python loop over fragments, faces or vertices):
+
+* signed distances d of the vertices; |d| <= ``snap`` counts as on the plane;
+* every edge whose ends lie strictly on opposite sides gets one intersection
+  point, computed from its lower-numbered end so both faces share it;
+* each face ring is walked once: the vertices with d >= 0 and the crossing
+  points form its part on the positive side, those with d <= 0 its part on
+  the negative side (a part without a vertex strictly on its side is dropped);
+* the section (the on-plane vertices and the crossing points, a convex
+  polygon) ordered by angle about its centroid closes both fragments as a
+  new face labelled with the joint's type, outward on each side.
+
+Rules (details and reasons in docs/cutting-3d.md):
+
+* a disc splits a fragment only if it crosses it completely (every vertex of
+  the section lies within the disc); fragments are re-examined until no disc
+  splits any more, so a disc cuts the pieces it crosses completely after
+  other joints have cut a larger fragment;
+* a cut that would leave a piece thinner than ``min_thickness`` (largest
+  distance of its vertices from the joint plane), smaller than
+  ``min_volume``, or degenerate (a face or the volume below 10 x the
+  tolerances of :func:`~srdda.geometry.polyhedron.normalize_polyhedron`) is not
+  made: the fragment stays whole and the skipped cut is reported
+  (:class:`SkippedCut`); volume is always conserved;
+* every final fragment is validated; one that fails (none is expected) is
+  removed and reported with the reason (:class:`RejectedFragment`).
+
+Joints are applied in the order given; without skipped cuts the result does
+not depend on that order (a joint that crosses a fragment completely crosses
+every piece of it that it meets).
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit, types
+from numba.typed import List
+from scipy.spatial import ConvexHull, QhullError
+
+from .cutting import NO_JOINT, CuttingError
+from .jointsets3d import JointPlanes
+from .polyhedron import (PLANARITY_TOLERANCE, PolyhedronError, PolyhedronMesh, _normalize_blocks, box,
+                         normalize_polyhedron, polyhedron_moments)
+
+__all__ = ["PolyhedralCut", "RejectedFragment", "SKIP_REASONS", "SkippedCut", "convex_hull_polyhedron",
+           "cut_polyhedra"]
+
+_SNAP = 1e-12  # vertices this close to a plane (x domain size) lie on it: the rounding level of the cut points
+_SAFETY = 10.0  # pieces must clear the validation's tolerances by this factor
+SKIP_REASONS = {1: "thinner than min_thickness", 2: "smaller than min_volume",
+                3: "degenerate (a face or the volume below the validation tolerance)"}
+
+
+@dataclass(frozen=True)
+class SkippedCut:
+    """A joint that crossed a fragment but did not split it, with why and where."""
+
+    joint: int  # index into the joints given
+    reason: str
+    value: float  # the thickness (m) or volume (m³) of the smaller piece
+    point: tuple[float, float, float]  # centroid of the section it would have cut
+
+
+@dataclass(frozen=True)
+class RejectedFragment:
+    """A fragment removed from the result because it is not a valid polyhedron."""
+
+    part: int
+    reason: str
+    centroid: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class PolyhedralCut:
+    """Convex blocks cut from a domain, as flat arrays.
+
+    Block ``b`` owns ``vertices[block_ptr[b]:block_ptr[b+1]]`` and faces
+    ``face_first[b]:face_first[b+1]``; face ``k`` is the ring of block-local
+    vertex indices ``face_vertex[face_ptr[k]:face_ptr[k+1]]``, outward
+    counter-clockwise, lying on a joint of type ``face_joint[k]``
+    (``NO_JOINT`` = -1: a face of the domain). ``block_part`` is the domain
+    part each block comes from.
+    """
+
+    vertices: np.ndarray
+    block_ptr: np.ndarray
+    face_first: np.ndarray
+    face_ptr: np.ndarray
+    face_vertex: np.ndarray
+    face_joint: np.ndarray
+    block_part: np.ndarray
+    skipped: tuple[SkippedCut, ...]
+    rejected: tuple[RejectedFragment, ...]
+
+    @property
+    def n_blocks(self) -> int:
+        return len(self.block_ptr) - 1
+
+    def block(self, b: int) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
+        """Vertices (n, 3), faces (local indices) and the faces' joint types of block ``b``."""
+        v = self.vertices[self.block_ptr[b]:self.block_ptr[b + 1]]
+        ks = range(self.face_first[b], self.face_first[b + 1])
+        faces = [self.face_vertex[self.face_ptr[k]:self.face_ptr[k + 1]] for k in ks]
+        return v, faces, self.face_joint[self.face_first[b]:self.face_first[b + 1]]
+
+    def blocks(self) -> list[tuple[np.ndarray, list[np.ndarray]]]:
+        """Every block as (vertices, faces)."""
+        return [self.block(b)[:2] for b in range(self.n_blocks)]
+
+    def mesh(self) -> PolyhedronMesh:
+        """The blocks laid out flat (validated), for exact volumes and moments."""
+        return PolyhedronMesh.from_blocks(self.blocks())
+
+    def volumes(self) -> np.ndarray:
+        """Exact volume of every block (m³)."""
+        mesh = self.mesh()
+        return polyhedron_moments(mesh.vertices, mesh).volume
+
+    def centroids(self) -> np.ndarray:
+        """Centroid (nb, 3) of every block."""
+        mesh = self.mesh()
+        return polyhedron_moments(mesh.vertices, mesh).centroid
+
+
+# -- the kernels ---------------------------------------------------------------------------------
+@njit(cache=True)
+def _piece_metrics(v: np.ndarray, corners: np.ndarray, fptr: np.ndarray) -> tuple[float, float, float]:
+    """(bounding-box diagonal, volume, smallest face area) of a polyhedron with outward faces."""
+    nv = v.shape[0]
+    lo = v[0].copy()
+    hi = v[0].copy()
+    ref = np.zeros(3)
+    for i in range(nv):
+        for k in range(3):
+            lo[k] = min(lo[k], v[i, k])
+            hi[k] = max(hi[k], v[i, k])
+            ref[k] += v[i, k] / nv
+    size = np.sqrt(np.sum((hi - lo) ** 2))
+    volume = 0.0
+    min_area = np.inf
+    for f in range(len(fptr) - 1):
+        s, e = fptr[f], fptr[f + 1]
+        p0 = v[corners[s]] - ref
+        nx = ny = nz = 0.0
+        for c in range(s + 1, e - 1):
+            a = v[corners[c]] - ref
+            b = v[corners[c + 1]] - ref
+            ux, uy, uz = a[0] - p0[0], a[1] - p0[1], a[2] - p0[2]
+            wx, wy, wz = b[0] - p0[0], b[1] - p0[1], b[2] - p0[2]
+            nx += uy * wz - uz * wy
+            ny += uz * wx - ux * wz
+            nz += ux * wy - uy * wx
+            volume += (p0[0] * (a[1] * b[2] - a[2] * b[1]) + p0[1] * (a[2] * b[0] - a[0] * b[2])
+                       + p0[2] * (a[0] * b[1] - a[1] * b[0])) / 6.0
+        min_area = min(min_area, 0.5 * np.sqrt(nx * nx + ny * ny + nz * nz))
+    return size, volume, min_area
+
+
+@njit(cache=True)
+def _split(v: np.ndarray, corners: np.ndarray, fptr: np.ndarray, labels: np.ndarray, normal: np.ndarray,
+           offset: float, snap: float, cap_label: int):
+    """Split one convex polyhedron by the plane normal·x = offset.
+
+    Returns (crossed, positive piece (v, corners, fptr, labels), negative
+    piece, section points (m, 3), largest |d| of the on-plane vertices,
+    largest d, largest -d). ``crossed`` is False when no two vertices lie
+    strictly on opposite sides (the pieces are then empty).
+    """
+    nv = v.shape[0]
+    d = np.empty(nv)
+    side = np.zeros(nv, dtype=np.int64)
+    n_pos = n_neg = 0
+    snapped = 0.0
+    d_max = 0.0
+    d_min = 0.0
+    for i in range(nv):
+        d[i] = v[i, 0] * normal[0] + v[i, 1] * normal[1] + v[i, 2] * normal[2] - offset
+        if d[i] > snap:
+            side[i] = 1
+            n_pos += 1
+        elif d[i] < -snap:
+            side[i] = -1
+            n_neg += 1
+        else:
+            snapped = max(snapped, abs(d[i]))
+        d_max = max(d_max, d[i])
+        d_min = min(d_min, d[i])
+    empty_v = np.zeros((0, 3))
+    empty_i = np.zeros(0, dtype=np.int64)
+    if n_pos == 0 or n_neg == 0:
+        return (False, empty_v, empty_i, empty_i, empty_i, empty_v, empty_i, empty_i, empty_i, empty_v,
+                snapped, d_max, -d_min)
+    nf = len(fptr) - 1
+    cross = np.full((nv, nv), -1, dtype=np.int64)
+    pts = np.empty((len(corners), 3))
+    nx = 0
+    for f in range(nf):
+        s, e = fptr[f], fptr[f + 1]
+        for c in range(s, e):
+            a, b = corners[c], corners[c + 1 if c + 1 < e else s]
+            if side[a] * side[b] == -1:
+                lo, hi = min(a, b), max(a, b)
+                if cross[lo, hi] < 0:
+                    t = d[lo] / (d[lo] - d[hi])
+                    pts[nx] = v[lo] + t * (v[hi] - v[lo])
+                    cross[lo, hi] = nv + nx
+                    nx += 1
+    allv = np.empty((nv + nx, 3))
+    allv[:nv] = v
+    allv[nv:] = pts[:nx]
+    all_side = np.zeros(nv + nx, dtype=np.int64)
+    all_side[:nv] = side
+    cap_size = nx
+    for i in range(nv):
+        if side[i] == 0:
+            cap_size += 1
+    cap = np.empty(cap_size, dtype=np.int64)
+    k = 0
+    for i in range(nv):
+        if side[i] == 0:
+            cap[k] = i
+            k += 1
+    for j in range(nx):
+        cap[k] = nv + j
+        k += 1
+    # order the section by angle about its centroid, counter-clockwise about the normal
+    centre = np.zeros(3)
+    for i in range(cap_size):
+        centre += allv[cap[i]] / cap_size
+    helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(normal, helper)
+    e1 /= np.sqrt(np.sum(e1 * e1))
+    e2 = np.cross(normal, e1)
+    angle = np.empty(cap_size)
+    for i in range(cap_size):
+        r = allv[cap[i]] - centre
+        angle[i] = np.arctan2(np.sum(r * e2), np.sum(r * e1))
+    cap = cap[np.argsort(angle)]
+    section = np.empty((cap_size, 3))
+    for i in range(cap_size):
+        section[i] = allv[cap[i]]
+    out = []
+    for sgn in (1, -1):
+        vmap = np.full(nv + nx, -1, dtype=np.int64)
+        count = 0
+        for i in range(nv + nx):
+            if all_side[i] * sgn >= 0:
+                vmap[i] = count
+                count += 1
+        pv = np.empty((count, 3))
+        for i in range(nv + nx):
+            if vmap[i] >= 0:
+                pv[vmap[i]] = allv[i]
+        pc = np.empty(len(corners) + 2 * nf + cap_size, dtype=np.int64)
+        pf = np.empty(nf + 2, dtype=np.int64)
+        pl = np.empty(nf + 1, dtype=np.int64)
+        pf[0] = 0
+        n_faces = 0
+        m = 0
+        for f in range(nf):
+            s, e = fptr[f], fptr[f + 1]
+            start = m
+            strict = False
+            for c in range(s, e):
+                a, b = corners[c], corners[c + 1 if c + 1 < e else s]
+                if side[a] * sgn >= 0:
+                    pc[m] = vmap[a]
+                    m += 1
+                    if side[a] == sgn:
+                        strict = True
+                if side[a] * side[b] == -1:
+                    pc[m] = vmap[cross[min(a, b), max(a, b)]]
+                    m += 1
+            if strict and m - start >= 3:
+                pl[n_faces] = labels[f]
+                n_faces += 1
+                pf[n_faces] = m
+            else:
+                m = start
+        # the section closes the piece: counter-clockwise about the outward normal (-sgn·normal)
+        for i in range(cap_size):
+            pc[m] = vmap[cap[cap_size - 1 - i] if sgn == 1 else cap[i]]
+            m += 1
+        pl[n_faces] = cap_label
+        n_faces += 1
+        pf[n_faces] = m
+        out.append((pv, pc[:m].copy(), pf[:n_faces + 1].copy(), pl[:n_faces].copy()))
+    p, q = out[0], out[1]
+    return (True, p[0], p[1], p[2], p[3], q[0], q[1], q[2], q[3], section, snapped, d_max, -d_min)
+
+
+@njit(cache=True)
+def _bbox_misses(v: np.ndarray, normal: np.ndarray, offset: float, centre: np.ndarray, radius: float,
+                 snap: float) -> bool:
+    """True if the plane (or disc) surely misses the bounding box of ``v``."""
+    lo = v[0].copy()
+    hi = v[0].copy()
+    for i in range(v.shape[0]):
+        for k in range(3):
+            lo[k] = min(lo[k], v[i, k])
+            hi[k] = max(hi[k], v[i, k])
+    mid = 0.5 * (lo + hi)
+    half = 0.5 * (hi - lo)
+    reach = np.abs(normal[0]) * half[0] + np.abs(normal[1]) * half[1] + np.abs(normal[2]) * half[2]
+    if abs(np.sum(normal * mid) - offset) > reach + snap:
+        return True
+    if np.isfinite(radius):
+        for k in range(3):
+            extent = radius * np.sqrt(max(0.0, 1.0 - normal[k] * normal[k]))
+            if centre[k] + extent < lo[k] - snap or centre[k] - extent > hi[k] + snap:
+                return True
+    return False
+
+
+@njit(cache=True)
+def _flatten(vs, cs, fs, ls):
+    """Typed lists of fragments as CSR arrays (vertices, block_ptr, face_first, face_ptr, face_vertex, labels)."""
+    nb = len(vs)
+    block_ptr = np.zeros(nb + 1, dtype=np.int64)
+    face_first = np.zeros(nb + 1, dtype=np.int64)
+    n_corner = 0
+    for b in range(nb):
+        block_ptr[b + 1] = block_ptr[b] + vs[b].shape[0]
+        face_first[b + 1] = face_first[b] + len(fs[b]) - 1
+        n_corner += len(cs[b])
+    vertices = np.empty((block_ptr[nb], 3))
+    face_ptr = np.zeros(face_first[nb] + 1, dtype=np.int64)
+    face_vertex = np.empty(n_corner, dtype=np.int64)
+    labels = np.empty(face_first[nb], dtype=np.int64)
+    m = 0
+    for b in range(nb):
+        vertices[block_ptr[b]:block_ptr[b + 1]] = vs[b]
+        f0 = face_first[b]
+        for f in range(len(fs[b]) - 1):
+            face_ptr[f0 + f + 1] = face_ptr[f0 + f] + fs[b][f + 1] - fs[b][f]
+            labels[f0 + f] = ls[b][f]
+        face_vertex[m:m + len(cs[b])] = cs[b]
+        m += len(cs[b])
+    return vertices, block_ptr, face_first, face_ptr, face_vertex, labels
+
+
+@njit(cache=True)
+def _cut_all(vertices, block_ptr, face_first, face_ptr, face_vertex, face_label, normals, points, radii, jlabels,
+             snap, min_volume, min_thickness, tol):
+    """Apply every joint to the convex parts given flat (CSR, as :func:`_flatten` returns them).
+
+    Returns the fragments flat (vertices, block_ptr, face_first, face_ptr,
+    face_vertex, labels), each fragment's part, and the skipped cuts (joint,
+    reason, value, point (k, 3)). Typed lists live only inside the kernel.
+    """
+    vs = List()
+    cs = List()
+    fs = List()
+    ls = List()
+    parts = List()
+    for b in range(len(block_ptr) - 1):
+        f0, f1 = face_first[b], face_first[b + 1]
+        vs.append(vertices[block_ptr[b]:block_ptr[b + 1]].copy())
+        cs.append(face_vertex[face_ptr[f0]:face_ptr[f1]].copy())
+        fs.append(face_ptr[f0:f1 + 1] - face_ptr[f0])
+        ls.append(face_label[f0:f1].copy())
+        parts.append(b)
+    n_joints = len(normals)
+    births = List()
+    for _ in range(len(vs)):
+        births.append(0)
+    stamp = np.full(n_joints, -1, dtype=np.int64)
+    clock = 0
+    skip_joint = List.empty_list(types.int64)
+    skip_reason = List.empty_list(types.int64)
+    skip_value = List.empty_list(types.float64)
+    skip_point = List.empty_list(types.float64[:])
+    first_pass = True
+    changed = True
+    while changed:
+        changed = False
+        for j in range(n_joints):
+            radius = radii[j]
+            if not first_pass and not np.isfinite(radius):
+                continue  # an infinite plane cut everything it could in the first pass
+            normal = normals[j]
+            centre = points[j]
+            offset = np.sum(normal * centre)
+            since = stamp[j]
+            stamp[j] = clock
+            n_now = len(vs)
+            for i in range(n_now):
+                if births[i] <= since:
+                    continue
+                if _bbox_misses(vs[i], normal, offset, centre, radius, snap):
+                    continue
+                res = _split(vs[i], cs[i], fs[i], ls[i], normal, offset, snap, jlabels[j])
+                if not res[0]:
+                    continue
+                section, snapped, d_pos, d_neg = res[9], res[10], res[11], res[12]
+                if np.isfinite(radius):
+                    inside = True
+                    for r in range(section.shape[0]):
+                        if np.sum((section[r] - centre) ** 2) > (radius * (1.0 + 1e-12) + snap) ** 2:
+                            inside = False
+                            break
+                    if not inside:
+                        continue
+                size_p, vol_p, area_p = _piece_metrics(res[1], res[2], res[3])
+                size_n, vol_n, area_n = _piece_metrics(res[5], res[6], res[7])
+                reason = 0
+                value = 0.0
+                if min(d_pos, d_neg) < min_thickness:
+                    reason, value = 1, min(d_pos, d_neg)
+                elif min(vol_p, vol_n) < min_volume:
+                    reason, value = 2, min(vol_p, vol_n)
+                elif (area_p <= _SAFETY * tol * size_p * size_p or area_n <= _SAFETY * tol * size_n * size_n
+                      or vol_p <= _SAFETY * tol * size_p ** 3 or vol_n <= _SAFETY * tol * size_n ** 3
+                      or snapped * _SAFETY > tol * min(size_p, size_n)):
+                    reason, value = 3, min(vol_p, vol_n)
+                if reason:
+                    skip_joint.append(j)
+                    skip_reason.append(reason)
+                    skip_value.append(value)
+                    mid = np.zeros(3)
+                    for r in range(section.shape[0]):
+                        mid += section[r] / section.shape[0]
+                    skip_point.append(mid)
+                    continue
+                clock += 1
+                vs[i], cs[i], fs[i], ls[i] = res[5], res[6], res[7], res[8]
+                births[i] = clock
+                vs.append(res[1])
+                cs.append(res[2])
+                fs.append(res[3])
+                ls.append(res[4])
+                parts.append(parts[i])
+                births.append(clock)
+                changed = True
+        first_pass = False
+    n_skip = len(skip_joint)
+    sj = np.empty(n_skip, dtype=np.int64)
+    sr = np.empty(n_skip, dtype=np.int64)
+    sv = np.empty(n_skip)
+    sp = np.empty((n_skip, 3))
+    for k in range(n_skip):
+        sj[k], sr[k], sv[k], sp[k] = skip_joint[k], skip_reason[k], skip_value[k], skip_point[k]
+    owner = np.empty(len(parts), dtype=np.int64)
+    for k in range(len(parts)):
+        owner[k] = parts[k]
+    return _flatten(vs, cs, fs, ls), owner, sj, sr, sv, sp
+
+
+# -- the domain ----------------------------------------------------------------------------------
+def _ring_arrays(faces: Sequence[np.ndarray], labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    counts = np.array([len(f) for f in faces])
+    return (np.concatenate(faces).astype(np.int64), np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+            labels.astype(np.int64))
+
+
+def _convex_part(part: object, label: str, tol: float) -> tuple[np.ndarray, list[np.ndarray]]:
+    """A validated convex polyhedron (vertices, outward faces) from (vertices, faces)."""
+    try:
+        vertices, faces = part  # type: ignore[misc]
+        v, outward = normalize_polyhedron(vertices, faces, label)
+    except (TypeError, ValueError) as exc:
+        raise CuttingError(f"domain {label}: {exc}" if not isinstance(exc, PolyhedronError) else str(exc)) from None
+    size = float(np.linalg.norm(np.ptp(v, axis=0)))
+    for k, f in enumerate(outward):
+        p = v[f] - v[f].mean(axis=0)
+        normal = 0.5 * np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)
+        normal /= np.linalg.norm(normal)
+        beyond = (v - v[f].mean(axis=0)) @ normal
+        if beyond.max() > tol * size:
+            raise CuttingError(f"domain {label}: not convex (vertex {int(beyond.argmax())} lies "
+                               f"{beyond.max():.3g} m outside the plane of face {k}); give a non-convex domain "
+                               f"as convex parts")
+    return v, outward
+
+
+def convex_hull_polyhedron(points: object, label: str = "domain") -> tuple[np.ndarray, list[np.ndarray]]:
+    """The convex hull of ``points`` (m, 3) as a polyhedron (vertices, outward faces), coplanar facets merged.
+
+    Built by clipping the points' bounding box with every hull plane (the
+    same kernel as the cutting), so each face is one planar polygon.
+    """
+    pts = np.asarray(points, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 4 or not np.all(np.isfinite(pts)):
+        raise CuttingError(f"{label}: a convex hull needs at least 4 finite [x, y, z] points")
+    try:
+        hull = ConvexHull(pts)
+    except QhullError:
+        raise CuttingError(f"{label}: the points are flat (coplanar); they span no volume") from None
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    v, faces = box(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo), label)
+    size = float(np.linalg.norm(hi - lo))
+    corners, fptr, labels = _ring_arrays(faces, np.full(len(faces), NO_JOINT))
+    for eq in hull.equations:  # outward unit normal n and n·x + b <= 0 inside
+        res = _split(v, corners, fptr, labels, eq[:3].copy(), float(-eq[3]), _SNAP * size, NO_JOINT)
+        if res[0]:
+            v, corners, fptr, labels = res[5], res[6], res[7], res[8]
+    faces = [corners[fptr[k]:fptr[k + 1]] for k in range(len(fptr) - 1)]
+    return v, faces
+
+
+def cut_polyhedra(domain: object, joints: JointPlanes, *, min_volume: float = 0.0, min_thickness: float = 0.0,
+                  boundary_type: int = NO_JOINT) -> PolyhedralCut:
+    """Cut a convex domain (or a list of convex parts) by joint planes and discs.
+
+    ``domain``: (vertices, faces) of a convex polyhedron, or a list of them
+    (a non-convex domain as convex parts); faces in any orientation.
+    ``joints``: :class:`~srdda.geometry.jointsets3d.JointPlanes` (planes,
+    discs, generated sets: :func:`~srdda.geometry.jointsets3d.joint_planes`).
+    ``min_volume`` (m³) and ``min_thickness`` (m): cuts leaving a smaller or
+    thinner piece are skipped and reported. Domain faces get ``boundary_type``.
+    """
+    if isinstance(domain, tuple) and len(domain) == 2 and np.ndim(domain[0]) == 2:
+        parts = [domain]
+    elif isinstance(domain, Sequence) and len(domain) > 0:
+        parts = list(domain)
+    else:
+        raise CuttingError("domain: give (vertices, faces) of a convex polyhedron or a list of them")
+    if not isinstance(joints, JointPlanes):
+        raise CuttingError("joints: give a JointPlanes (JointPlanes.of, or joint_planes for joint sets)")
+    for name, value in (("min_volume", min_volume), ("min_thickness", min_thickness)):
+        if not (np.isfinite(value) and value >= 0):
+            raise CuttingError(f"{name} must be a finite number >= 0, got {value}")
+    convex = [_convex_part(p, f"part {k}", 10 * PLANARITY_TOLERANCE) for k, p in enumerate(parts)]
+    all_v = np.concatenate([v for v, _ in convex])
+    size = float(np.linalg.norm(np.ptp(all_v, axis=0)))
+    shift = 0.5 * (all_v.min(axis=0) + all_v.max(axis=0))  # cut about the domain's centre: full precision
+    flat = [np.concatenate([v - shift for v, _ in convex])]
+    n_faces = [len(faces) for _, faces in convex]
+    flat.append(np.concatenate([[0], np.cumsum([len(v) for v, _ in convex])]))
+    flat.append(np.concatenate([[0], np.cumsum(n_faces)]))
+    rings = [f for _, faces in convex for f in faces]
+    flat.append(np.concatenate([[0], np.cumsum([len(f) for f in rings])]))
+    flat.append(np.concatenate(rings))
+    flat.append(np.full(sum(n_faces), boundary_type))
+    flat = [np.ascontiguousarray(a, dtype=np.int64 if k else float) for k, a in enumerate(flat)]
+    (vertices, block_ptr, face_first, face_ptr, face_vertex, labels), block_part, sj, sr, sv, sp = _cut_all(
+        *flat, np.ascontiguousarray(joints.normal).reshape(-1, 3),
+        np.ascontiguousarray(joints.point - shift).reshape(-1, 3), np.ascontiguousarray(joints.radius, dtype=float),
+        np.ascontiguousarray(joints.joint_type, dtype=np.int64), _SNAP * size, float(min_volume),
+        float(min_thickness), PLANARITY_TOLERANCE)
+    skipped = tuple(SkippedCut(int(j), SKIP_REASONS[int(r)], float(val), tuple((p + shift).tolist()))
+                    for j, r, val, p in zip(sj, sr, sv, sp))
+    vertices += shift
+    keep, rejected = _validate(vertices, block_ptr, face_first, face_ptr, face_vertex, block_part)
+    if rejected:
+        vertices, block_ptr, face_first, face_ptr, face_vertex, labels, block_part = _subset(
+            keep, vertices, block_ptr, face_first, face_ptr, face_vertex, labels, block_part)
+    return PolyhedralCut(vertices, block_ptr, face_first, face_ptr, face_vertex, labels, block_part, skipped,
+                         tuple(rejected))
+
+
+def _validate(vertices: np.ndarray, block_ptr: np.ndarray, face_first: np.ndarray, face_ptr: np.ndarray,
+              face_vertex: np.ndarray, block_part: np.ndarray) -> tuple[np.ndarray, list[RejectedFragment]]:
+    """Which fragments pass :func:`normalize_polyhedron` (all at once; one by one only if some fail)."""
+    nb = len(block_ptr) - 1
+    blocks = [(vertices[block_ptr[b]:block_ptr[b + 1]],
+               [face_vertex[face_ptr[k]:face_ptr[k + 1]] for k in range(face_first[b], face_first[b + 1])])
+              for b in range(nb)]
+    labels = [f"fragment {b}" for b in range(nb)]
+    try:
+        _normalize_blocks(blocks, labels)
+        return np.ones(nb, dtype=bool), []
+    except PolyhedronError:
+        pass
+    keep = np.ones(nb, dtype=bool)
+    rejected = []
+    for b, (v, faces) in enumerate(blocks):
+        try:
+            normalize_polyhedron(v, faces, labels[b])
+        except PolyhedronError as exc:
+            keep[b] = False
+            rejected.append(RejectedFragment(int(block_part[b]), str(exc), tuple(v.mean(axis=0).tolist())))
+    return keep, rejected
+
+
+def _subset(keep: np.ndarray, vertices: np.ndarray, block_ptr: np.ndarray, face_first: np.ndarray,
+            face_ptr: np.ndarray, face_vertex: np.ndarray, labels: np.ndarray, block_part: np.ndarray) -> tuple:
+    """The CSR arrays of the kept blocks only."""
+    nv_b, nf_b = np.diff(block_ptr), np.diff(face_first)
+    nc_f = np.diff(face_ptr)
+    v_keep = np.repeat(keep, nv_b)
+    f_keep = np.repeat(keep, nf_b)
+    c_keep = np.repeat(f_keep, nc_f)
+    return (vertices[v_keep], np.concatenate([[0], np.cumsum(nv_b[keep])]),
+            np.concatenate([[0], np.cumsum(nf_b[keep])]), np.concatenate([[0], np.cumsum(nc_f[f_keep])]),
+            face_vertex[c_keep], labels[f_keep], block_part[keep])
