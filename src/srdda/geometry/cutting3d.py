@@ -52,7 +52,7 @@ from .polyhedron import (PLANARITY_TOLERANCE, PolyhedronError, PolyhedronMesh, _
                          normalize_polyhedron, polyhedron_moments)
 
 __all__ = ["PolyhedralCut", "RejectedFragment", "SKIP_REASONS", "SkippedCut", "convex_hull_polyhedron",
-           "cut_polyhedra"]
+           "cut_polyhedra", "halfspace_polyhedron"]
 
 _SNAP = 1e-12  # vertices this close to a plane (x domain size) lie on it: the rounding level of the cut points
 _SAFETY = 10.0  # pieces must clear the validation's tolerances by this factor
@@ -496,15 +496,34 @@ def convex_hull_polyhedron(points: object, label: str = "domain") -> tuple[np.nd
     except QhullError:
         raise CuttingError(f"{label}: the points are flat (coplanar); they span no volume") from None
     lo, hi = pts.min(axis=0), pts.max(axis=0)
-    v, faces = box(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo), label)
-    size = float(np.linalg.norm(hi - lo))
+    margin = 0.1 * (hi - lo)
+    return halfspace_polyhedron(hull.equations[:, :3], -hull.equations[:, 3], lo - margin, hi + margin, label)
+
+
+def halfspace_polyhedron(normals: object, offsets: object, lo: Sequence[float], hi: Sequence[float],
+                         label: str = "polyhedron") -> tuple[np.ndarray, list[np.ndarray]]:
+    """The convex polyhedron {x in [lo, hi] : normals[k]·x <= offsets[k] for every k}: (vertices, outward faces).
+
+    The box [lo, hi] clipped by each half-space with the cutting kernel, so
+    coplanar constraints give one face. An empty result is a
+    :class:`CuttingError`.
+    """
+    n = np.asarray(normals, dtype=float).reshape(-1, 3)
+    c = np.asarray(offsets, dtype=float).reshape(-1)
+    v, faces = box(lo, hi, label)
+    size = float(np.linalg.norm(np.asarray(hi, float) - np.asarray(lo, float)))
     corners, fptr, labels = _ring_arrays(faces, np.full(len(faces), NO_JOINT))
-    for eq in hull.equations:  # outward unit normal n and n·x + b <= 0 inside
-        res = _split(v, corners, fptr, labels, eq[:3].copy(), float(-eq[3]), _SNAP * size, NO_JOINT)
+    for k in range(len(n)):
+        length = float(np.linalg.norm(n[k]))
+        if not length > 0:
+            raise CuttingError(f"{label}: half-space {k} has a zero normal")
+        d = v @ (n[k] / length) - c[k] / length
+        if d.min() > -_SNAP * size:
+            raise CuttingError(f"{label}: half-space {k} leaves nothing of the polyhedron")
+        res = _split(v, corners, fptr, labels, n[k] / length, c[k] / length, _SNAP * size, NO_JOINT)
         if res[0]:
             v, corners, fptr, labels = res[5], res[6], res[7], res[8]
-    faces = [corners[fptr[k]:fptr[k + 1]] for k in range(len(fptr) - 1)]
-    return v, faces
+    return v, [corners[fptr[k]:fptr[k + 1]] for k in range(len(fptr) - 1)]
 
 
 def cut_polyhedra(domain: object, joints: JointPlanes, *, min_volume: float = 0.0, min_thickness: float = 0.0,
