@@ -235,3 +235,74 @@ def test_cut_blocks_go_straight_into_a_model():
     assert np.array_equal(arrays.block_fixed, fixed) and np.array_equal(arrays.block_material, cut.block_part)
     with pytest.raises(ModelError, match=r"part\(s\) \[1\]"):
         add_cut_polyhedra(Model(), cut, {0: "rock"})
+
+
+_CUT_FILE = """
+gravity = [0, 0, -9.81]
+[run]
+dt = 1e-3
+steps = 1
+contacts = false
+[materials.rock]
+density = 2600
+young = "10 GPa"
+poisson = 0.25
+[cutting]
+seed = 4
+fixed_box = [[-1, -1, -6], [41, 21, 0]]
+[[cutting.domain]]
+material = "rock"
+vertices = [[10, 0, 0], [40, 0, 0], [40, 20, 0], [10, 20, 0], [21.547, 0, 20], [40, 0, 20], [40, 20, 20],
+            [21.547, 20, 20]]
+[[cutting.domain]]
+material = "rock"
+box = [[0, 0, -5], [40, 20, 0]]
+[[cutting.joint_sets]]
+dip = 35
+dip_direction = 270
+spacing = "300 cm"
+kappa = 40
+[[cutting.joints]]
+point = [20, 10, 10]
+dip = 60
+dip_direction = 90
+radius = 30
+[[measured_points]]
+at = [30, 10, 10]
+block = "cut 3"
+"""
+
+
+def test_the_cutting_section_of_a_model_file_builds_the_cut_blocks():
+    import tomllib
+
+    from srdda.io.modelfile import ModelFileError, model_from_dict
+
+    data = tomllib.loads(_CUT_FILE)
+    model, _ = model_from_dict(data, "cut.toml")
+    parts = [convex_hull_polyhedron(data["cutting"]["domain"][0]["vertices"]), box((0, 0, -5), (40, 20, 0))]
+    sets = [JointSet3D(35, 270, 3.0, kappa=40)]
+    points = np.concatenate([p[0] for p in parts])
+    disc = JointPlanes.of(plane_normal(60, 90), [20, 10, 10], 30.0)
+    cut = cut_polyhedra(parts, JointPlanes.concatenate([joint_planes(points, sets, seed=4), disc]))
+    assert len(model.blocks) == cut.n_blocks > 10
+    assert [b.name for b in model.blocks[:2]] == ["cut 0", "cut 1"]
+    assert np.array_equal(np.concatenate([b.vertices for b in model.blocks]), cut.vertices)
+    # the base slab's blocks (centroid below z = 0) are the fixed ones
+    assert [b.fixed for b in model.blocks] == (cut.centroids()[:, 2] < 0).tolist()
+    assert model.measured_points[0][0] == 3
+    bad = tomllib.loads(_CUT_FILE)
+    bad["cutting"]["domain"][1]["vertices"] = [[0, 0, 0]] * 4
+    with pytest.raises(ModelFileError, match=r"cutting: domain\[1\]: give 'box', or 'vertices'"):
+        model_from_dict(bad, "cut.toml")
+    bad = tomllib.loads(_CUT_FILE)
+    bad["cutting"]["domain"][0]["material"] = "granite"
+    with pytest.raises(ModelFileError, match=r"domain\[0\].material: unknown material 'granite'"):
+        model_from_dict(bad, "cut.toml")
+    bad = tomllib.loads(_CUT_FILE)
+    bad["cutting"]["joint_sets"][0]["dipp"] = 3
+    with pytest.raises(ModelFileError, match=r"cutting.joint_sets\[0\].dipp: unknown field"):
+        model_from_dict(bad, "cut.toml")
+    del bad["cutting"]
+    with pytest.raises(ModelFileError, match="no blocks"):
+        model_from_dict(bad, "cut.toml")
