@@ -299,52 +299,96 @@ def _split(v: np.ndarray, corners: np.ndarray, fptr: np.ndarray, labels: np.ndar
 
 
 @njit(cache=True)
-def _bbox_misses(v: np.ndarray, normal: np.ndarray, offset: float, centre: np.ndarray, radius: float,
-                 snap: float) -> bool:
-    """True if the plane (or disc) surely misses the bounding box of ``v``."""
-    lo = v[0].copy()
-    hi = v[0].copy()
+def _disc_cuts(v: np.ndarray, corners: np.ndarray, fptr: np.ndarray, normal: np.ndarray, offset: float,
+               centre: np.ndarray, radius: float, snap: float) -> bool:
+    """True if the plane crosses the polyhedron (vertices strictly on both sides) and, for a disc, the whole
+    section lies within it; checked edge by edge without building the pieces."""
+    nv = v.shape[0]
+    d = np.empty(nv)
+    pos = neg = False
+    for i in range(nv):
+        d[i] = v[i, 0] * normal[0] + v[i, 1] * normal[1] + v[i, 2] * normal[2] - offset
+        pos |= d[i] > snap
+        neg |= d[i] < -snap
+    if not (pos and neg):
+        return False
+    if not np.isfinite(radius):
+        return True
+    reach = (radius * (1.0 + 1e-12) + snap) ** 2
+    for i in range(nv):
+        if abs(d[i]) <= snap and np.sum((v[i] - centre) ** 2) > reach:
+            return False
+    for f in range(len(fptr) - 1):
+        s, e = fptr[f], fptr[f + 1]
+        for c in range(s, e):
+            a, b = corners[c], corners[c + 1 if c + 1 < e else s]
+            if a < b and ((d[a] > snap and d[b] < -snap) or (d[a] < -snap and d[b] > snap)):
+                p = v[a] + d[a] / (d[a] - d[b]) * (v[b] - v[a])
+                if np.sum((p - centre) ** 2) > reach:
+                    return False
+    return True
+
+
+@njit(cache=True)
+def _bbox(v: np.ndarray) -> np.ndarray:
+    """(lo, hi) of the vertices, as one array of 6."""
+    out = np.empty(6)
+    for k in range(3):
+        out[k] = v[0, k]
+        out[3 + k] = v[0, k]
     for i in range(v.shape[0]):
         for k in range(3):
-            lo[k] = min(lo[k], v[i, k])
-            hi[k] = max(hi[k], v[i, k])
-    mid = 0.5 * (lo + hi)
-    half = 0.5 * (hi - lo)
-    reach = np.abs(normal[0]) * half[0] + np.abs(normal[1]) * half[1] + np.abs(normal[2]) * half[2]
-    if abs(np.sum(normal * mid) - offset) > reach + snap:
+            out[k] = min(out[k], v[i, k])
+            out[3 + k] = max(out[3 + k], v[i, k])
+    return out
+
+
+@njit(cache=True)
+def _bbox_misses(box6: np.ndarray, normal: np.ndarray, offset: float, centre: np.ndarray, radius: float,
+                 snap: float) -> bool:
+    """True if the plane (or disc) surely misses the box (lo, hi) = ``box6``."""
+    reach = 0.0
+    mid = 0.0
+    for k in range(3):
+        reach += abs(normal[k]) * 0.5 * (box6[3 + k] - box6[k])
+        mid += normal[k] * 0.5 * (box6[3 + k] + box6[k])
+    if abs(mid - offset) > reach + snap:
         return True
     if np.isfinite(radius):
         for k in range(3):
             extent = radius * np.sqrt(max(0.0, 1.0 - normal[k] * normal[k]))
-            if centre[k] + extent < lo[k] - snap or centre[k] - extent > hi[k] + snap:
+            if centre[k] + extent < box6[k] - snap or centre[k] - extent > box6[3 + k] + snap:
                 return True
     return False
 
 
 @njit(cache=True)
-def _flatten(vs, cs, fs, ls):
-    """Typed lists of fragments as CSR arrays (vertices, block_ptr, face_first, face_ptr, face_vertex, labels)."""
-    nb = len(vs)
+def _flatten(vs, cs, fs, ls, alive):
+    """The live fragments of typed lists as CSR arrays (vertices, block_ptr, face_first, face_ptr, face_vertex,
+    labels)."""
+    live = np.array([k for k in range(len(vs)) if alive[k]], dtype=np.int64)
+    nb = len(live)
     block_ptr = np.zeros(nb + 1, dtype=np.int64)
     face_first = np.zeros(nb + 1, dtype=np.int64)
     n_corner = 0
     for b in range(nb):
-        block_ptr[b + 1] = block_ptr[b] + vs[b].shape[0]
-        face_first[b + 1] = face_first[b] + len(fs[b]) - 1
-        n_corner += len(cs[b])
+        block_ptr[b + 1] = block_ptr[b] + vs[live[b]].shape[0]
+        face_first[b + 1] = face_first[b] + len(fs[live[b]]) - 1
+        n_corner += len(cs[live[b]])
     vertices = np.empty((block_ptr[nb], 3))
     face_ptr = np.zeros(face_first[nb] + 1, dtype=np.int64)
     face_vertex = np.empty(n_corner, dtype=np.int64)
     labels = np.empty(face_first[nb], dtype=np.int64)
     m = 0
     for b in range(nb):
-        vertices[block_ptr[b]:block_ptr[b + 1]] = vs[b]
+        k = live[b]
+        vertices[block_ptr[b]:block_ptr[b + 1]] = vs[k]
         f0 = face_first[b]
-        for f in range(len(fs[b]) - 1):
-            face_ptr[f0 + f + 1] = face_ptr[f0 + f] + fs[b][f + 1] - fs[b][f]
-            labels[f0 + f] = ls[b][f]
-        face_vertex[m:m + len(cs[b])] = cs[b]
-        m += len(cs[b])
+        for f in range(len(fs[k]) - 1):
+            face_ptr[f0 + f + 1] = face_ptr[f0 + f] + fs[k][f + 1] - fs[k][f]
+            labels[f0 + f] = ls[k][f]
+        face_vertex[m:m + len(cs[k])] = cs[k]
+        m += len(cs[k])
     return vertices, block_ptr, face_first, face_ptr, face_vertex, labels
 
 
@@ -370,11 +414,13 @@ def _cut_all(vertices, block_ptr, face_first, face_ptr, face_vertex, face_label,
         ls.append(face_label[f0:f1].copy())
         parts.append(b)
     n_joints = len(normals)
-    births = List()
-    for _ in range(len(vs)):
-        births.append(0)
-    stamp = np.full(n_joints, -1, dtype=np.int64)
-    clock = 0
+    cap = 4 * len(vs) + 64
+    alive = np.zeros(cap, dtype=np.bool_)
+    boxes = np.empty((cap, 6))
+    for k in range(len(vs)):
+        alive[k] = True
+        boxes[k] = _bbox(vs[k])
+    start = np.zeros(n_joints, dtype=np.int64)  # fragments before this index were seen by the joint already
     skip_joint = List.empty_list(types.int64)
     skip_reason = List.empty_list(types.int64)
     skip_value = List.empty_list(types.float64)
@@ -390,26 +436,14 @@ def _cut_all(vertices, block_ptr, face_first, face_ptr, face_vertex, face_label,
             normal = normals[j]
             centre = points[j]
             offset = np.sum(normal * centre)
-            since = stamp[j]
-            stamp[j] = clock
             n_now = len(vs)
-            for i in range(n_now):
-                if births[i] <= since:
+            for i in range(start[j], n_now):
+                if not alive[i] or _bbox_misses(boxes[i], normal, offset, centre, radius, snap):
                     continue
-                if _bbox_misses(vs[i], normal, offset, centre, radius, snap):
+                if not _disc_cuts(vs[i], cs[i], fs[i], normal, offset, centre, radius, snap):
                     continue
                 res = _split(vs[i], cs[i], fs[i], ls[i], normal, offset, snap, jlabels[j])
-                if not res[0]:
-                    continue
                 section, snapped, d_pos, d_neg = res[9], res[10], res[11], res[12]
-                if np.isfinite(radius):
-                    inside = True
-                    for r in range(section.shape[0]):
-                        if np.sum((section[r] - centre) ** 2) > (radius * (1.0 + 1e-12) + snap) ** 2:
-                            inside = False
-                            break
-                    if not inside:
-                        continue
                 size_p, vol_p, area_p = _piece_metrics(res[1], res[2], res[3])
                 size_n, vol_n, area_n = _piece_metrics(res[5], res[6], res[7])
                 reason = 0
@@ -431,16 +465,26 @@ def _cut_all(vertices, block_ptr, face_first, face_ptr, face_vertex, face_label,
                         mid += section[r] / section.shape[0]
                     skip_point.append(mid)
                     continue
-                clock += 1
-                vs[i], cs[i], fs[i], ls[i] = res[5], res[6], res[7], res[8]
-                births[i] = clock
-                vs.append(res[1])
-                cs.append(res[2])
-                fs.append(res[3])
-                ls.append(res[4])
-                parts.append(parts[i])
-                births.append(clock)
+                alive[i] = False  # its two pieces follow, so later joints and passes see them as new
+                if len(vs) + 2 > cap:
+                    cap *= 2
+                    grown = np.zeros(cap, dtype=np.bool_)
+                    grown[:len(vs)] = alive[:len(vs)]
+                    alive = grown
+                    grown_boxes = np.empty((cap, 6))
+                    grown_boxes[:len(vs)] = boxes[:len(vs)]
+                    boxes = grown_boxes
+                pieces = ((res[1], res[2], res[3], res[4]), (res[5], res[6], res[7], res[8]))
+                for pv, pc, pf, pl in pieces:
+                    vs.append(pv)
+                    cs.append(pc)
+                    fs.append(pf)
+                    ls.append(pl)
+                    parts.append(parts[i])
+                    alive[len(vs) - 1] = True
+                    boxes[len(vs) - 1] = _bbox(pv)
                 changed = True
+            start[j] = len(vs)  # the pieces this joint made lie on one side of it
         first_pass = False
     n_skip = len(skip_joint)
     sj = np.empty(n_skip, dtype=np.int64)
@@ -449,10 +493,8 @@ def _cut_all(vertices, block_ptr, face_first, face_ptr, face_vertex, face_label,
     sp = np.empty((n_skip, 3))
     for k in range(n_skip):
         sj[k], sr[k], sv[k], sp[k] = skip_joint[k], skip_reason[k], skip_value[k], skip_point[k]
-    owner = np.empty(len(parts), dtype=np.int64)
-    for k in range(len(parts)):
-        owner[k] = parts[k]
-    return _flatten(vs, cs, fs, ls), owner, sj, sr, sv, sp
+    owner = np.array([parts[k] for k in range(len(parts)) if alive[k]], dtype=np.int64)
+    return _flatten(vs, cs, fs, ls, alive), owner, sj, sr, sv, sp
 
 
 # -- the domain ----------------------------------------------------------------------------------

@@ -20,7 +20,7 @@ from pydantic import ValidationError
 from ..cutmodel import add_cut_polyhedra
 from ..history import HistoryError, MotionHistory
 from ..geometry.cutting import CuttingError
-from ..geometry.cutting3d import convex_hull_polyhedron, cut_polyhedra
+from ..geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
 from ..geometry.jointsets3d import JointPlanes, JointSet3D, joint_planes, plane_normal
 from ..geometry.polygon import PolygonError
 from ..geometry.polyhedron import PolyhedronError, box
@@ -29,7 +29,7 @@ from ..settings import RunSettings
 from .schema import BlockSection, CuttingSection, HistorySection, ModelFile
 
 __all__ = ["ModelFileError", "load_model", "read_model_text", "model_from_dict", "save_model", "model_to_dict",
-           "format_validation"]
+           "format_validation", "cut_section"]
 
 
 class ModelFileError(ValueError):
@@ -161,15 +161,13 @@ def _add_block(model: Model, b: BlockSection, label: str) -> None:
     model.add_polyhedron(vertices, faces, b.material, b.velocity or (0.0, 0.0, 0.0), omega, stress, label, b.fixed)
 
 
-def _add_cutting(model: Model, c: CuttingSection) -> None:
-    """3D blocks cut from the section's convex domain parts by its joint sets and joints (docs/cutting-3d.md)."""
+def cut_section(c: CuttingSection) -> PolyhedralCut:
+    """The 3D cut a ``[cutting]`` section describes: its convex domain parts cut by its joint sets and joints."""
     parts = []
     for k, d in enumerate(c.domain):
         where = f"domain[{k}]"
         if (d.box is None) == (d.vertices is None) or (d.faces is not None and d.vertices is None):
             raise ModelError(f"{where}: give 'box', or 'vertices' (with 'faces', or without: their convex hull)")
-        if d.material not in model.materials:
-            raise ModelError(f"{where}.material: unknown material {d.material!r}")
         if d.box is not None:
             parts.append(box(*d.box, where))
         else:
@@ -181,7 +179,15 @@ def _add_cutting(model: Model, c: CuttingSection) -> None:
                             [np.inf if j.radius is None else j.radius for j in c.joints],
                             np.array([j.joint_type for j in c.joints], dtype=np.int64))
     joints = JointPlanes.concatenate([joint_planes(points, sets, c.seed), single])
-    cut = cut_polyhedra(parts, joints, min_volume=c.min_volume, min_thickness=c.min_thickness)
+    return cut_polyhedra(parts, joints, min_volume=c.min_volume, min_thickness=c.min_thickness)
+
+
+def _add_cutting(model: Model, c: CuttingSection) -> None:
+    """3D blocks cut as the section says (docs/cutting-3d.md), fixed by part or by ``fixed_box``."""
+    for k, d in enumerate(c.domain):
+        if d.material not in model.materials:
+            raise ModelError(f"domain[{k}].material: unknown material {d.material!r}")
+    cut = cut_section(c)
     fixed = np.array([c.domain[p].fixed for p in cut.block_part], dtype=bool)
     if c.fixed_box is not None:
         centroid = cut.centroids()
