@@ -306,3 +306,24 @@ def test_the_cutting_section_of_a_model_file_builds_the_cut_blocks():
     del bad["cutting"]
     with pytest.raises(ModelFileError, match="no blocks"):
         model_from_dict(bad, "cut.toml")
+
+
+def test_a_fragment_failing_validation_is_removed_and_reported():
+    # the kernel's own checks leave no such fragment, so the reporting path is driven directly: a unit cube
+    # and a "cube" squashed flat (zero volume) laid out as the kernel returns them
+    from srdda.geometry.cutting3d import _subset, _validate
+
+    cube_v, faces = box((0, 0, 0), (1, 1, 1))
+    flat_v = cube_v * [1, 1, 0] + [2, 0, 0]
+    vertices = np.vstack([cube_v, flat_v])
+    block_ptr, face_first = np.array([0, 8, 16]), np.array([0, 6, 12])
+    rings = [f for f in faces] * 2
+    face_ptr = np.concatenate([[0], np.cumsum([len(f) for f in rings])])
+    face_vertex = np.concatenate(rings)
+    keep, rejected = _validate(vertices, block_ptr, face_first, face_ptr, face_vertex, np.array([0, 3]))
+    assert keep.tolist() == [True, False] and len(rejected) == 1
+    assert rejected[0].part == 3 and "fragment 1" in rejected[0].reason
+    assert rejected[0].centroid == pytest.approx((2.5, 0.5, 0.0))
+    out = _subset(keep, vertices, block_ptr, face_first, face_ptr, face_vertex, np.arange(12), np.array([0, 3]))
+    assert np.array_equal(out[0], cube_v) and out[1].tolist() == [0, 8] and out[2].tolist() == [0, 6]
+    assert np.array_equal(out[4], np.concatenate(faces)) and out[5].tolist() == list(range(6))

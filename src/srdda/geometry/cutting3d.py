@@ -48,7 +48,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .cutting import NO_JOINT, CuttingError
 from .jointsets3d import JointPlanes
-from .polyhedron import (PLANARITY_TOLERANCE, PolyhedronError, PolyhedronMesh, _normalize_blocks, box,
+from .polyhedron import (PLANARITY_TOLERANCE, PolyhedronError, PolyhedronMesh, box, normalize_polyhedra,
                          normalize_polyhedron, polyhedron_moments)
 
 __all__ = ["PolyhedralCut", "RejectedFragment", "SKIP_REASONS", "SkippedCut", "convex_hull_polyhedron",
@@ -499,9 +499,8 @@ def _cut_all(vertices, block_ptr, face_first, face_ptr, face_vertex, face_label,
 
 # -- the domain ----------------------------------------------------------------------------------
 def _ring_arrays(faces: Sequence[np.ndarray], labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    counts = np.array([len(f) for f in faces])
-    return (np.concatenate(faces).astype(np.int64), np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
-            labels.astype(np.int64))
+    """Faces as (corners, CSR offsets, labels) for the kernel."""
+    return np.concatenate(faces).astype(np.int64), _offsets([len(f) for f in faces]), labels.astype(np.int64)
 
 
 def _convex_part(part: object, label: str, tol: float) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -594,15 +593,11 @@ def cut_polyhedra(domain: object, joints: JointPlanes, *, min_volume: float = 0.
     all_v = np.concatenate([v for v, _ in convex])
     size = float(np.linalg.norm(np.ptp(all_v, axis=0)))
     shift = 0.5 * (all_v.min(axis=0) + all_v.max(axis=0))  # cut about the domain's centre: full precision
-    flat = [np.concatenate([v - shift for v, _ in convex])]
-    n_faces = [len(faces) for _, faces in convex]
-    flat.append(np.concatenate([[0], np.cumsum([len(v) for v, _ in convex])]))
-    flat.append(np.concatenate([[0], np.cumsum(n_faces)]))
     rings = [f for _, faces in convex for f in faces]
-    flat.append(np.concatenate([[0], np.cumsum([len(f) for f in rings])]))
-    flat.append(np.concatenate(rings))
-    flat.append(np.full(sum(n_faces), boundary_type))
-    flat = [np.ascontiguousarray(a, dtype=np.int64 if k else float) for k, a in enumerate(flat)]
+    flat = (np.ascontiguousarray(np.concatenate([v for v, _ in convex]) - shift),  # the parts as CSR arrays
+            _offsets([len(v) for v, _ in convex]), _offsets([len(faces) for _, faces in convex]),
+            _offsets([len(f) for f in rings]), np.concatenate(rings).astype(np.int64),
+            np.full(len(rings), boundary_type, dtype=np.int64))
     (vertices, block_ptr, face_first, face_ptr, face_vertex, labels), block_part, sj, sr, sv, sp = _cut_all(
         *flat, np.ascontiguousarray(joints.normal).reshape(-1, 3),
         np.ascontiguousarray(joints.point - shift).reshape(-1, 3), np.ascontiguousarray(joints.radius, dtype=float),
@@ -619,6 +614,11 @@ def cut_polyhedra(domain: object, joints: JointPlanes, *, min_volume: float = 0.
                          tuple(rejected))
 
 
+def _offsets(counts: list[int]) -> np.ndarray:
+    """CSR offsets (n + 1,) of consecutive groups of the given sizes."""
+    return np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+
+
 def _validate(vertices: np.ndarray, block_ptr: np.ndarray, face_first: np.ndarray, face_ptr: np.ndarray,
               face_vertex: np.ndarray, block_part: np.ndarray) -> tuple[np.ndarray, list[RejectedFragment]]:
     """Which fragments pass :func:`normalize_polyhedron` (all at once; one by one only if some fail)."""
@@ -628,7 +628,7 @@ def _validate(vertices: np.ndarray, block_ptr: np.ndarray, face_first: np.ndarra
               for b in range(nb)]
     labels = [f"fragment {b}" for b in range(nb)]
     try:
-        _normalize_blocks(blocks, labels)
+        normalize_polyhedra(blocks, labels)
         return np.ones(nb, dtype=bool), []
     except PolyhedronError:
         pass
