@@ -8,7 +8,8 @@ from srdda.geometry.cutting import NO_JOINT, CuttingError
 from srdda.geometry.cutting3d import convex_hull_polyhedron, cut_polyhedra
 from srdda.geometry.jointsets3d import (JointPlanes, JointSet3D, dip_and_direction, fisher_directions,
                                         joint_planes, plane_normal)
-from srdda.geometry.polyhedron import PolyhedronMesh, box, normalize_polyhedron, polyhedron_moments
+from srdda.geometry.polyhedron import (PolyhedronError, PolyhedronMesh, box, normalize_polyhedron,
+                                      polyhedron_moments)
 
 
 def _volume(blocks: list) -> float:
@@ -327,3 +328,26 @@ def test_a_fragment_failing_validation_is_removed_and_reported():
     out = _subset(keep, vertices, block_ptr, face_first, face_ptr, face_vertex, np.arange(12), np.array([0, 3]))
     assert np.array_equal(out[0], cube_v) and out[1].tolist() == [0, 8] and out[2].tolist() == [0, 6]
     assert np.array_equal(out[4], np.concatenate(faces)) and out[5].tolist() == list(range(6))
+
+
+def test_model_add_polyhedra_checks_its_input_like_add_polyhedron():
+    from srdda.model import Material, Model, ModelError
+
+    model = Model(gravity=(0.0, 0.0, -9.81))
+    model.add_material("rock", Material(2600.0, 1e10, 0.25))
+    cube = box((0, 0, 0), (1, 1, 1))
+    assert model.add_polyhedra([], [], [], []) == []
+    with pytest.raises(ModelError, match="one material, name and fixed flag per block"):
+        model.add_polyhedra([cube], ["rock", "rock"], ["a"], [False])
+    with pytest.raises(ModelError, match="b: unknown material 'granite'"):
+        model.add_polyhedra([cube, cube], ["rock", "granite"], ["a", "b"], [False, True])
+    assert model.add_polyhedra([cube, box((1, 0, 0), (2, 1, 1))], ["rock"] * 2, ["a", "b"], [False, True]) == [0, 1]
+    assert [b.fixed for b in model.blocks] == [False, True] and model.blocks[1].name == "b"
+    flat = (cube[0] * [1, 1, 0], cube[1])
+    with pytest.raises(PolyhedronError, match="block 'c'"):  # as add_polyhedron: the validation's own error
+        model.add_polyhedra([flat], ["rock"], ["c"], [False])
+    planar = Model()
+    planar.add_material("rock", Material(2600.0, 1e10, 0.25))
+    planar.add_block([[0, 0], [1, 0], [1, 1]], "rock")
+    with pytest.raises(ModelError):
+        planar.add_polyhedra([cube], ["rock"], ["d"], [False])

@@ -303,8 +303,9 @@ class Model:
         unknown = sorted(set(materials) - set(self.materials))
         if unknown:
             raise ModelError(f"{names[list(materials).index(unknown[0])]}: unknown material {unknown[0]!r}")
-        if blocks:
-            self._same_dimension(SOLID.dim, names[0])
+        if not blocks:
+            return []
+        self._same_dimension(SOLID.dim, names[0])
         mat_index = {name: k for k, name in enumerate(self.materials)}
         first = len(self.blocks)
         rest = (0.0,) * (2 * SOLID.dim)
