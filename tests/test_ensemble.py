@@ -366,3 +366,18 @@ def test_a_killed_ensemble_resumes(reference: Path, tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     assert all(p.read_bytes() == text for p, text in written.items())  # finished runs were not run again
     assert_same_tables(reference, out)
+
+
+def test_the_paper_report_gets_the_ensemble_section(reference: Path, tmp_path: Path) -> None:
+    from srdda.report import write_report
+
+    shutil.copytree(reference, tmp_path / "ensemble")
+    md, html_path = write_report(tmp_path, [], command="test")
+    text = md.read_text()
+    assert "## Probabilistic rockfall" in text and "ensemble/figures/envelopes.png" in text
+    hits = tables(reference)["collectors"]
+    crossed = sum(c and name == "x=2.5" for c, name in zip(hits["crossed"], hits["collector"]))
+    assert f"| x=2.5 | {crossed} / 6 |" in text
+    assert html_path.read_text().count("<figure>") == 3
+    plain, _ = write_report(tmp_path / "without", [], command="test")
+    assert "Probabilistic rockfall" not in plain.read_text()
