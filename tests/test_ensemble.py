@@ -22,8 +22,9 @@ import pytest
 from click.testing import CliRunner
 
 from srdda.cli import main
-from srdda.ensemble import SpecError, apply_values, load_spec, run_ensemble, sample
-from srdda.ensemble.collect import Ground, SettleRule
+from srdda.ensemble import SpecError, apply_values, load_spec, run_ensemble, run_one, sample
+from srdda.ensemble.collect import SettleRule
+from srdda.geometry.ground import Ground
 from srdda.ensemble.spec import StopRule
 from srdda.io.modelfile import load_model
 from srdda.simulation import run
@@ -229,12 +230,8 @@ def test_a_bad_spec_is_one_clear_error(tmp_path: Path, change: tuple[str, str], 
 
 def test_samples_depend_on_seed_and_index_only(tmp_path: Path) -> None:
     spec, _ = load_spec(write_spec(tmp_path))
-    assert sample(spec, 4) == sample(replace_runs(spec, 1000), 4)
+    assert sample(spec, 4) == sample(spec.model_copy(update={"runs": 1000}), 4)
     assert sample(spec, 4) != sample(spec, 5)
-
-
-def replace_runs(spec, runs: int):
-    return spec.model_copy(update={"runs": runs})
 
 
 def test_distributions_have_their_moments(tmp_path: Path) -> None:
@@ -381,3 +378,47 @@ def test_the_paper_report_gets_the_ensemble_section(reference: Path, tmp_path: P
     assert html_path.read_text().count("<figure>") == 3
     plain, _ = write_report(tmp_path / "without", [], command="test")
     assert "Probabilistic rockfall" not in plain.read_text()
+
+
+SOLID = """
+gravity = [0.0, 0.0, -9.81]
+[run]
+dt = "5 ms"
+end_time = 0.3
+contacts = false
+[materials.rock]
+density = 2700.0
+young = "20 GPa"
+poisson = 0.25
+[[blocks]]
+name = "ground"
+material = "rock"
+fixed = true
+box = [[-5.0, -5.0, -1.0], [5.0, 5.0, 0.0]]
+[[blocks]]
+name = "stone"
+material = "rock"
+box = [[-0.2, -0.3, 1.0], [0.2, 0.3, 1.4]]
+velocity = [2.0, 0.0, 0.0]
+angular_velocity = [0.0, 0.0, 1.5]
+"""
+
+
+def test_a_collector_plane_in_3d(tmp_path: Path) -> None:
+    spec_text = ('model = "slope.toml"\nruns = 1\nseed = 0\nstations = [0.5]\n[[collectors]]\nname = "level"\n'
+                 'at = [0.0, 0.0, 1.0]\nnormal = [0.0, 0.0, -1.0]\n')
+    spec, base = load_spec(write_spec(tmp_path, spec_text, SOLID))
+    got = run_one(spec, base, 0)
+    assert got["status"] == "ok", got["message"]
+    mass = 2700.0 * 0.4 * 0.6 * 0.4
+    rotational = 0.5 * mass * (0.4**2 + 0.6**2) / 12.0 * 1.5**2  # ½·I_z·ω², box about its vertical axis
+    # free flight under constant gravity: the time scheme is exact for a constant acceleration
+    station, level = got["collectors"]["x=0.5"], got["collectors"]["level"]
+    assert station["time"] == pytest.approx(0.25, rel=1e-12)
+    assert station["z"] == pytest.approx(1.2 - 0.5 * 9.81 * 0.25**2, rel=1e-12)
+    assert station["bounce_height"] == pytest.approx(station["z"], rel=1e-12)  # the ground's top is z = 0
+    assert station["kinetic_rotational"] == pytest.approx(rotational, rel=1e-6)  # strain-free rigid box
+    # the level z = 1 is crossed downwards between two steps: linear interpolation, one step's curvature
+    t = math.sqrt(2 * 0.2 / 9.81)
+    assert level["time"] == pytest.approx(t, abs=0.5 * 9.81 * 0.005**2 / (9.81 * t))
+    assert level["bounce_height"] == pytest.approx(1.0, rel=1e-12)

@@ -91,10 +91,13 @@ def run_file(out: Path, index: int) -> Path:
 def read_run_files(out: Path, runs: int) -> dict[int, dict[str, Any]]:
     """The finished runs of ``out`` with an index below ``runs``, by index."""
     found: dict[int, dict[str, Any]] = {}
-    for path in sorted((out / RUNS_DIR).glob("run-*.json")):
+    for path in sorted((out / RUNS_DIR).glob("run-[0-9]*.json")):
         index = int(path.stem.removeprefix("run-"))
         if index < runs:
-            found[index] = json.loads(path.read_text(encoding="utf-8"))
+            try:
+                found[index] = json.loads(path.read_text(encoding="utf-8"))
+            except (ValueError, OSError) as exc:
+                raise SpecError(f"{path}: not a readable run file ({exc}); delete it to run that run again") from None
     return found
 
 

@@ -83,7 +83,7 @@ def set_path(data: dict[str, Any], path: str, value: float) -> None:
     """Set the model-file field at ``path`` (tables by key, lists by [index] or by an entry's name)."""
     parts = _split(path)
     node: Any = data
-    for k, key in enumerate(parts[:-1]):
+    for key in parts[:-1]:
         node = _child(node, key, f"path {path!r}")
     last = parts[-1]
     _child(node, last, f"path {path!r}")  # the field must exist in the base model
