@@ -34,20 +34,32 @@ def _save(fig: plt.Figure, path: Path) -> Path:
 
 
 def _runout(runs: pa.Table, axis: str) -> plt.Figure:
+    """Histogram of where the runs stopped, and the fraction of all runs stopped before each position.
+
+    Runs that left the stop domain have no stopping point: they are left out of
+    the histogram and counted in the fraction's denominator only (the curve
+    ends below 1 by their share).
+    """
     ok = np.array(runs.column("status").to_pylist()) == "ok"
-    end = np.sort(runs.column(f"end_{axis}").to_numpy()[ok])
+    left = np.array(runs.column("stop_reason").to_pylist()) == "out_of_domain"
+    end = np.sort(runs.column(f"end_{axis}").to_numpy()[ok & ~left])
+    total = int(ok.sum())
     fig, (hist, cdf) = plt.subplots(1, 2, figsize=(9.5, 3.6))
     hist.hist(end, bins=max(5, min(40, len(end) // 5)), color="#4a7ab5", edgecolor="white")
     hist.set_xlabel(f"end position {axis} (m)")
     hist.set_ylabel("runs")
-    cdf.step(end, np.arange(1, len(end) + 1) / max(len(end), 1), where="post", color="k")
+    fraction = np.arange(1, len(end) + 1) / max(total, 1)
+    cdf.step(end, fraction, where="post", color="k")
     for q, style in ((50, ":"), (95, "--"), (99, "-.")):
-        if len(end):
-            cdf.axvline(np.percentile(end, q), color="0.4", linestyle=style, label=f"P{q}")
+        k = int(np.ceil(q / 100 * total)) - 1  # the q-th percentile run, if it stopped in the domain
+        if 0 <= k < len(end):
+            cdf.axvline(end[k], color="0.4", linestyle=style, label=f"P{q}")
+    cdf.set_ylim(0, 1.02)
     cdf.set_xlabel(f"end position {axis} (m)")
     cdf.set_ylabel("fraction of runs stopped before")
     cdf.legend(loc="lower right")
-    fig.suptitle(f"Runout of {len(end)} runs")
+    out = f"; {int((ok & left).sum())} left the domain" if np.any(ok & left) else ""
+    fig.suptitle(f"Runout of {total} runs{out}")
     fig.tight_layout()
     return fig
 
@@ -108,7 +120,8 @@ def _trajectories(base: dict[str, Any], runs: pa.Table, trajectories: pa.Table, 
 def ensemble_figures(spec: EnsembleSpec, base: dict[str, Any], runs: pa.Table, collectors: pa.Table,
                      trajectories: pa.Table, dim: int, folder: Path) -> list[tuple[str, Path]]:
     """Draw and save the figures; ``(caption, path)`` of each."""
-    figures = [("Runout: histogram and cumulative distribution of the tracked block's end position x.",
+    figures = [("Runout: histogram of where the tracked block stopped (x of its centroid) and the fraction of all "
+                "runs stopped before each x (runs that left the domain are in the fraction's denominator only).",
                 _save(_runout(runs, "x"), folder / "runout.png"))]
     if spec.all_collectors(dim):
         figures.append(("Kinetic energy (translational + rotational) and bounce height at the collectors: "

@@ -30,7 +30,8 @@ def ensemble_section(doc: dict[str, Any], figures: list[tuple[str, Path]], dim: 
     energy = "J/m" if dim == 2 else "J"
     title = f"Probabilistic rockfall: {doc['title']}" if doc["title"] else "Probabilistic rockfall"
     r = doc["runout"]
-    intro = (f"{doc['runs']} runs: {doc['ok']} completed, {doc['diverged']} diverged, {doc['failed']} failed"
+    intro = (f"{doc['runs']} runs: {doc['ok']} completed ({doc['left_domain']} of them left the domain), "
+             f"{doc['diverged']} diverged, {doc['failed']} failed"
              f"{'' if doc.get('complete', True) else ' (the ensemble is not complete yet)'}. Runout (horizontal "
              f"distance travelled by the tracked block): mean {_g(r['mean'])} m, P50 {_g(r['p50'])} m, P95 "
              f"{_g(r['p95'])} m, P99 {_g(r['p99'])} m, max {_g(r['max'])} m. Bounce height: the centroid's height "

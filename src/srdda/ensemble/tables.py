@@ -117,6 +117,7 @@ def summary(spec: EnsembleSpec, runs: pa.Table, collectors: pa.Table, dim: int) 
     out: dict[str, Any] = {
         "title": spec.title, "runs": len(status), "ok": int(ok.sum()), "failed": int((status == "failed").sum()),
         "diverged": int((status == "diverged").sum()),
+        "left_domain": int(np.sum(np.array(runs.column("stop_reason").to_pylist(), dtype=object) == "out_of_domain")),
         "runout": _stats(runs.column("runout").to_numpy()[ok]),
         **{f"end_{a}": _stats(runs.column(f"end_{a}").to_numpy()[ok]) for a in "xyz"[:dim]},
         "max_kinetic_energy": _stats(runs.column("max_kinetic_energy").to_numpy()[ok]),
