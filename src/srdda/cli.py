@@ -336,6 +336,34 @@ def bench_command(as_json: bool, quick: bool, models: tuple[str, ...], steps: in
     click.echo(json.dumps({"rows": rows}, indent=1) if as_json else format_table(rows))
 
 
+@main.command("ensemble")
+@click.argument("spec", type=click.Path(exists=True, dir_okay=False))
+@click.option("--runs", type=click.IntRange(min=1), default=None, help="Number of runs (default: the spec's).")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Worker processes of the local Dask cluster (default: one per core).")
+@click.option("--scheduler", default=None, help="Address of a running Dask scheduler to use instead (tcp://HOST:PORT).")
+@click.option("--out", "out", type=click.Path(file_okay=False), default=None,
+              help="Output folder; an existing one of the same spec is resumed (default: a new folder named after SPEC).")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def ensemble_command(spec: str, runs: int | None, workers: int | None, scheduler: str | None, out: str | None,
+                     quiet: bool) -> None:
+    """Run an ensemble of sampled runs on Dask; tables, statistics and figures in --out (docs/ensembles.md)."""
+    from .ensemble import SpecError, load_spec, run_ensemble
+
+    if workers is not None and scheduler is not None:
+        raise click.UsageError("give --workers (a local cluster) or --scheduler (a running one), not both")
+    try:
+        load_spec(spec, runs)  # every error in the spec or its model before an output folder is made
+        done = run_ensemble(spec, output_folder(spec, out), runs, workers, scheduler, progress=not quiet)
+    except SpecError as exc:
+        raise click.UsageError(str(exc)) from None
+    except OSError as exc:
+        raise click.ClickException(f"{exc}") from None
+    click.echo(f"{done.spec.runs} runs in {done.out} ({done.ran} run now, {done.resumed} already there, "
+               f"{done.failed} failed or diverged) in {done.seconds:.1f} s: runs.parquet, collectors.parquet, "
+               "summary.json, summary.csv, figures/, report.html")
+
+
 main.add_command(plot_command)
 main.add_command(animate_command)
 main.add_command(vtk_command)

@@ -39,6 +39,7 @@ from .io.results_store import ResultsStore  # noqa: E402
 from .model import Model  # noqa: E402
 from .results import Result  # noqa: E402
 from .simulation import run  # noqa: E402
+from .ensemble.report import paper_report_section  # noqa: E402
 
 __all__ = ["ExampleRun", "FIGURES", "register_figures", "run_examples", "write_report", "make_report",
            "pivot_table"]
@@ -333,6 +334,7 @@ def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str
             data = base64.b64encode(png).decode("ascii")
             hb.append(f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(caption)}'>"
                       f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+    paper_report_section(out, md, hb)  # the probabilistic rockfall of DIR/ensemble, when one was run there
     md_path, html_path = out / "report.md", out / "report.html"
     md_path.write_text("\n".join(md), encoding="utf-8")
     html_path.write_text("<!doctype html><html><head><meta charset='utf-8'><title>srdda report</title>"

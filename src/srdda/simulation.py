@@ -33,7 +33,8 @@ class TimeStepWarning(UserWarning):
 
 
 def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[int], None] | None = None,
-        state: State | None = None, recorders: Sequence[Recorder] = (), keep_history: bool = True) -> Result:
+        state: State | None = None, recorders: Sequence[Recorder] = (), keep_history: bool = True,
+        stop: Callable[[State], bool] | None = None) -> Result:
     """Run ``model`` for ``settings.n_steps`` steps or to ``settings.end_time``; pure (no global state).
 
     Steps are recorded every ``settings.record_every`` steps (and the first and
@@ -41,7 +42,8 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     ``keep_history=False`` keeps only the first and last recorded step in the
     Result (stream long runs to a :class:`~srdda.io.results_store.ResultsStore`).
     A run that cannot go on (singular system, non-finite values, Δt below its
-    minimum) ends with ``result.status`` saying why.
+    minimum) ends with ``result.status`` saying why. ``stop(state)``, called after every
+    accepted step, ends the run (completed, that step recorded) when it returns True.
     """
     arrays = model.arrays() if isinstance(model, Model) else model
     stepper = Stepper(arrays, settings, get_solver(settings.solver))
@@ -86,11 +88,14 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
         created = watch.check(energy, arrays, before, state) if watch is not None else None
         if created is not None:
             warnings.warn(created, EnergyWarning, stacklevel=2)
-        if state.step % settings.record_every == 0 or state.step == last_step or (
+        stopped = stop is not None and stop(state)
+        if stopped or state.step % settings.record_every == 0 or state.step == last_step or (
                 end_time is not None and _reached(state.time, end_time, settings.dt)):
             record(outcome.solves, energy)
         if progress is not None:
             progress(state.step)
+        if stopped:
+            break
     for sink in sinks:
         sink.finish(status, state)
     summary.emit()
