@@ -64,11 +64,12 @@ def test_report_is_written_from_its_own_runs(tmp_path: Path, stub_examples: list
 
 
 def test_pivot_table_puts_ours_beside_the_paper() -> None:
-    rows = [{"table": "T", "quantity": "w", "step": None, "method": m, "ours": o, "paper": p, "exact": 2.0}
-            for m, o, p in (("dda0", 1.9, 1.95), ("srdda", 2.002, 2.1))]
+    rows = [{"table": "T", "quantity": "w", "step": None, "method": m, "ours": o, "paper": p, "exact": 2.0,
+             "unit": "rad/s"} for m, o, p in (("dda0", 1.9, 1.95), ("srdda", 2.002, 2.1))]
     header, body = pivot_table(rows, ["dda0", "srdda"])
-    assert header == ["quantity", "CS", "exact", "DDA0 ours", "DDA0 paper", "SRDDA ours", "SRDDA paper"]
-    assert body == [["w", "", "2.000000", "1.90000000 (-5.0000%)", "1.95 (-2.5000%)",
+    assert header == ["quantity", "unit", "CS (step)", "exact", "DDA0 ours", "DDA0 paper", "SRDDA ours",
+                      "SRDDA paper"]
+    assert body == [["w", "rad/s", "", "2.000000", "1.90000000 (-5.0000%)", "1.95 (-2.5000%)",
                      "2.00200000 (+0.1000%)", "2.1 (+5.0000%)"]]
 
 

@@ -210,11 +210,12 @@ def _pct(x: float | None) -> str:
 
 def print_rows(rows: list[dict]) -> None:
     """Print table rows as aligned text, ours beside the paper's, with relative errors."""
-    header = ("table", "quantity", "step", "method", "ours", "paper", "exact", "RE ours", "RE paper")
+    header = ("table", "quantity", "unit", "step", "method", "ours", "paper", "exact", "RE ours", "RE paper")
     lines = [header]
     for r in rows:
         digits = 0 if isinstance(r["paper"], int) else 6  # counts (contact steps) print as counts
-        lines.append((r["table"], r["quantity"], "-" if r["step"] is None else str(r["step"]), r["method"],
+        lines.append((r["table"], r["quantity"], r.get("unit", "-"), "-" if r["step"] is None else str(r["step"]),
+                      r["method"],
                       _fmt(r["ours"], digits), _fmt(r["paper"], digits), _fmt(r["exact"], digits),
                       _pct(relative_error(r["ours"], r["exact"])),
                       _pct(None if r["paper"] is None else relative_error(r["paper"], r["exact"]))))

@@ -61,7 +61,7 @@ def tables(results: dict[str, Result]) -> list[Row]:
                 continue
             rows.append({"table": "Table 5", "quantity": "distance_B1_B2", "step": step, "method": method,
                          "ours": float(hinge_distance(res)[steps.index(step)]),
-                         "paper": per_method.get(method), "exact": 0.0})
+                         "paper": per_method.get(method), "exact": 0.0, "unit": "m"})
     return rows
 
 

@@ -106,7 +106,8 @@ def contact_events(result: Result) -> list[int]:
 def _row(table: str, quantity: str, step: int | None, method: str, ours: float | None, paper: float | None,
          exact: float | None) -> Row:
     return {"table": table, "quantity": quantity, "step": step, "method": method,
-            "ours": None if ours is None else float(ours), "paper": paper, "exact": exact}
+            "ours": None if ours is None else float(ours), "paper": paper, "exact": exact,
+            "unit": "step" if quantity.endswith("_step") else "s" if quantity.endswith("_time") else "rad/s"}
 
 
 def tables(results: dict[str, Result]) -> list[Row]:

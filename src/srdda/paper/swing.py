@@ -40,8 +40,9 @@ ROD_OMEGA = float(np.sqrt(3 * 10.0 / 10.0))  # thin rod of length 10 m
 
 def _row(table: str, quantity: str, step: int | None, method: str, ours: float, paper: float,
          exact: float | None) -> Row:
+    unit = "m²" if quantity.startswith("area") else "rad/s"  # block areas, or angular velocities
     return {"table": table, "quantity": quantity, "step": step, "method": method, "ours": float(ours),
-            "paper": paper, "exact": exact}
+            "paper": paper, "exact": exact, "unit": unit}
 
 
 def _area_at(result: Result, block: int, step: int) -> float:
