@@ -573,10 +573,9 @@ def fig_energy_ledger(results: Results | Mapping[str, Results], title: str = "")
         ax.ticklabel_format(axis="y", useOffset=False)
     for ax in axes.flat[len(keep):]:
         ax.remove()
-    for col in range(ncols):  # the last axes of a column that lost its bottom neighbour shows its times
-        rows = [r for r in range(nrows) if r * ncols + col < len(keep)]
-        axes[rows[-1], col].xaxis.set_tick_params(labelbottom=True)
-        axes[rows[-1], col].set_xlabel("time (s)")
+    for ax in axes.flat[: len(keep)]:  # every panel says its time axis: one glance, no counting rows
+        ax.set_xlabel("time (s)", fontsize=8)
+        ax.xaxis.set_tick_params(labelbottom=True)
     if len(runs) > 1:
         fig.legend(*axes.flat[0].get_legend_handles_labels(), loc="outside upper center", ncols=len(runs),
                    fontsize="small")
