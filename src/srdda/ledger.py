@@ -15,7 +15,7 @@ kept constraint (srdda, dda0), not for dda1's post-adjustment; D_dashpots
 (``dissipated``): c|Δx_rel|²/Δt per step; D_friction (``dissipated_friction``):
 the work the sliding contacts' Coulomb forces took out, -Σ F·Δs with F the
 friction force of the step's last solve and Δs the slip of the contact vertex
-along the edge over the step (:meth:`srdda.contact.term.ContactStep.friction_work`).
+along the edge over the step (:meth:`srdda.contact.term.ContactStep.work`).
 D_numerical is what is left: the time scheme's and the linearisation's own
 dissipation or drift, and the energy of contact springs that open or unlock
 while stretched, so ``balance`` =
