@@ -50,3 +50,21 @@ def test_rockfall_balance_closes_within_one_percent() -> None:
     # the contact penalty take out more than ten times that energy
     assert np.max(np.abs(ledger["error"])) < 0.01 * initial
     assert ledger["dissipated_friction"][-1] > 5 * initial and ledger["dissipated_contact"][-1] > initial
+
+
+@pytest.mark.parametrize("method", ["dda0", "srdda"])
+def test_a_springs_step_force_loss_is_in_the_ledger(method: str) -> None:
+    # a 1 × 1 m block held at its centroid by a fixed-point spring, given 1 m/s: with c_p = 1 the
+    # spring's end-of-step force takes ½k|Δx|² per step out of the oscillation (Δt = T/20)
+    m = srdda.Model()
+    m.add_material("rock", srdda.Material(density=1000.0, young=1e10, poisson=0.25))
+    m.add_block([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], "rock", velocity=(1.0, 0.0))
+    k = 1e6  # N/m: T = 2π sqrt(1000 / 1e6) = 0.199 s
+    m.add_fixed_point([0.5, 0.5], block=0, stiffness=k)
+    res = srdda.run(m, srdda.RunSettings(dt=0.01, n_steps=200, method=method, contacts=False))
+    ledger = plotting.ledger_series(res)
+    x = np.asarray(res.centroid)[:, 0, 0]
+    expected = 0.5 * k * np.sum(np.diff(x) ** 2)  # ½k|Δx|² summed over the steps (the centroid is the point)
+    assert ledger["dissipated_springs"][-1] == pytest.approx(expected, rel=1e-9)  # rounding only
+    assert ledger["dissipated_springs"][-1] > 0.5 * ledger["kinetic"][0]  # the loss is large at Δt = T/20
+    assert np.max(np.abs(ledger["error"])) < 1e-9 * ledger["kinetic"][0]

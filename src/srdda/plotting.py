@@ -512,6 +512,7 @@ LEDGER_PANELS = (
     ("dissipated", "dissipated by dashpots"),
     ("dissipated_friction", "dissipated by friction"),
     ("dissipated_contact", "taken out by the contact penalty\n(impacts, springs released stretched)"),
+    ("dissipated_springs", "taken out by the springs' step force\n(negative: put in by the point update)"),
     ("error", "balance error: E − E₀ − W_in + D\n(time scheme, linearisation)"),
 )
 

@@ -110,7 +110,8 @@ def _common(results: dict[str, Result]) -> FigureList:
     figs = [("Energy ledger per method, one panel per entry on its own scale (J per m of thickness): stored "
              "energies (the gravity potential is the moving blocks', from their initial centroid heights: "
              "fixed blocks excluded), the cumulative work that entered (loads, prescribed motion, hinge forces), "
-             "the cumulative energy taken out (dashpots, friction, the contact penalty's impact loss) and the "
+             "the cumulative energy taken out (dashpots, friction, the contact penalty's impact loss, the "
+             "springs' step force) and the "
              "balance error E − E₀ − W_in + D (the time scheme's and the linearisation's own loss or gain). "
              "Entries that stay zero are left out; methods that agree draw on top of each other (solid DDA0, "
              "dashed DDA1, dotted SRDDA). E₀ is the initial energy above the datum. Largest balance "
@@ -159,7 +160,8 @@ def _nunchaku(results: dict[str, Result], model: Model) -> FigureList:
 @register_figures("rockfall")
 def _rockfall(results: dict[str, Result], model: Model) -> FigureList:
     return [("Fig. 15: trajectories of P1 (centroid, blue) and P2 (vertex, red) (x, y in m) over the fixed slope "
-             "(grey) by (a) DDA0, (b) DDA1, (c) SRDDA.", plotting.fig_rockfall(results, background=_fixed_blocks(model)))]
+             "(grey) by (a) DDA0, (b) DDA1, (c) SRDDA.",
+             plotting.fig_rockfall(results, background=_fixed_blocks(model)))]
 
 
 def _generic(results: dict[str, Result], model: Model) -> FigureList:
