@@ -173,12 +173,17 @@ def fig_configuration(arrays: Any, title: str = "", labels: Sequence[str] | None
     hinges and pins black rings, driven (prescribed-motion) points purple
     diamonds, point loads orange triangles, measured points red dots labelled
     with ``labels`` (default P0, P1...; points at one place share one label).
-    A long chain (10 blocks or more, 20 times longer than high) gets a second
-    panel: its left end, enlarged, where the springs and points can be told apart.
+    A slender model (20 times longer than high) with springs, hinges or driven
+    points gets a second panel: a tenth of its length around the leftmost of
+    them, enlarged, where they can be told apart.
     """
     lo, hi = arrays.vertices.min(axis=0), arrays.vertices.max(axis=0)
     width, height = hi - lo
-    slender = width > 20 * max(height, 1e-12) and arrays.n_blocks >= 10  # a long chain: its parts crowd
+    links = arrays.links
+    details = np.concatenate([arrays.points[rows] for rows in (
+        links.prescribed_rows, arrays.spring_rows_a, links.spring_rows_a, links.hinge_rows_a)])
+    # a slender model with springs, hinges or driven points: those crowd at the full model's scale
+    slender = width > 20 * max(height, 1e-12) and len(details) > 0
     fig, axes = plt.subplots(2 if slender else 1, 1, figsize=(7, 6.5 if slender else 4.5), layout="constrained",
                              squeeze=False)
     _draw_configuration(axes[0, 0], arrays, labels)
@@ -187,13 +192,14 @@ def fig_configuration(arrays: Any, title: str = "", labels: Sequence[str] | None
     half = max(height, width / 6.0) / 2 + pad  # a 10 m rod 0.1 m thick gets a readable height
     mid = 0.5 * (lo[1] + hi[1])
     axes[0, 0].set(xlim=(lo[0] - pad, hi[0] + pad), ylim=(mid - half, mid + half))
-    if slender:
+    if slender:  # enlarged below: a tenth of the model around its first detail (from the left)
         zoom = axes[1, 0]
         _draw_configuration(zoom, arrays, labels)
         span = width / 10
-        zoom.set(xlim=(lo[0] - 0.02 * span, lo[0] + span), ylim=(mid - span / 6, mid + span / 6),
-                 title=f"left end enlarged (x from {lo[0]:.3g} to {lo[0] + span:.3g} m)")
-        axes[0, 0].indicate_inset((lo[0] - 0.02 * span, mid - span / 6, 1.02 * span, span / 3), edgecolor="0.4")
+        x0 = float(np.clip(details[:, 0].min() - span / 2, lo[0] - 0.02 * span, hi[0] + 0.02 * span - span))
+        zoom.set(xlim=(x0, x0 + span), ylim=(mid - span / 6, mid + span / 6),
+                 title=f"enlarged: x from {x0:.3g} to {x0 + span:.3g} m")
+        axes[0, 0].indicate_inset((x0, mid - span / 6, span, span / 3), edgecolor="0.4")
     handles, names = axes[0, 0].get_legend_handles_labels()
     if handles:
         fig.legend(handles, names, fontsize="small", loc="outside lower center", ncols=4)
@@ -341,7 +347,8 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
     """A recorded quantity against time, one line per block (or measured point; ``blocks`` picks them)."""
     runs = runs if isinstance(runs, Mapping) else {method_label(runs.method): runs}
     fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
-    for label, res in runs.items():
+    styles = ("-", "--", ":", "-.")
+    for r, (label, res) in enumerate(runs.items()):
         t = history(res, "time")
         y = history(res, quantity)
         if y.ndim == 1:
@@ -352,8 +359,9 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
                              "or use fig_trajectories")
         names = ([f"point {k}" for k in range(y.shape[1])] if quantity.startswith("measured_")
                  else res.block_names)
-        for b in (range(y.shape[1]) if blocks is None else blocks):
-            ax.plot(t, y[:, b], label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
+        for b in (range(y.shape[1]) if blocks is None else blocks):  # a colour per block, a style per run
+            ax.plot(t, y[:, b], styles[r % len(styles)], color=f"C{b % 10}",
+                    label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
     ax.set(xlabel="time (s)", ylabel=_label(next(iter(runs.values())), quantity))
     if len(ax.get_lines()) <= MAX_LEGEND:
         fig.legend(fontsize="small", loc="outside right upper")
