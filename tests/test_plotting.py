@@ -145,3 +145,17 @@ def test_any_run_model_trajectories_and_time_series(tmp_path) -> None:
         plotting.history(res, "velocity.nope")
     with pytest.raises(ValueError, match="vertex history"):
         plotting.fig_model(srdda.run(two_block_model(), settings))
+
+
+def test_every_quantity_has_a_unit_and_colour_bars_say_it(tmp_path) -> None:
+    path = tmp_path / "r.h5"
+    settings = srdda.RunSettings(dt=1e-3, n_steps=10, method="srdda")
+    srdda.run(two_block_model(), settings, recorders=[ResultsStore(path, settings)])
+    res = read_results(path)
+    units = {name: plotting.quantity_unit(res, name) for name in plotting.quantity_names(res)}
+    assert units["stress.sxx"] == "Pa" and units["velocity.omega"] == "rad/s" and units["energy.total"] == "J/m"
+    fig = plotting.fig_model(res, color="stress.sxx")
+    assert fig.axes[1].get_ylabel() == "stress.sxx (Pa)"
+    matplotlib.pyplot.close(fig)
+    with pytest.raises(KeyError, match="no unit known for 'nope'"):
+        plotting.quantity_unit(res, "nope")

@@ -88,7 +88,7 @@ def _axes_without_units(figures) -> list[str]:
     for caption, fig in figures:
         for ax in fig.axes:
             if not ax.get_visible() or not (ax.lines or ax.collections):
-                continue  # (colour bars carry their unit as their label too: they are checked)
+                continue  # removed or empty panels draw nothing to read
             for which, label in (("x", ax.get_xlabel()), ("y", ax.get_ylabel())):
                 if not UNIT.search(label):
                     missing.append(f"{caption[:40]!r}: {which} label {label!r} of {ax.get_title()!r}")

@@ -41,7 +41,7 @@ __all__ = ["history", "quantity_names", "block_values", "method_label", "plot_bl
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
            "fig_trajectories", "fig_time_series",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index",
-           "quantity_unit", "fig_energy_ledger", "ledger_series", "LEDGER_PANELS"]
+           "quantity_unit", "quantity_label", "fig_energy_ledger", "ledger_series", "LEDGER_PANELS"]
 
 Results = Any  # Result or StoredResult: both have .array(name), .block_names, .method
 Background = tuple[np.ndarray, np.ndarray]  # (vertices, block_ptr) of blocks drawn grey (slopes, ground)
@@ -119,7 +119,8 @@ def quantity_unit(res: Results, name: str) -> str:
     return unit
 
 
-def _label(res: Results, name: str) -> str:
+def quantity_label(res: Results, name: str) -> str:
+    """An axis or colour-bar label: the quantity's name and its unit, ``"stress.sxx (Pa)"``."""
     return f"{name} ({quantity_unit(res, name)})"
 
 
@@ -260,7 +261,7 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     values = block_values(res, index, color)
     coll = plot_blocks(ax, verts[index], res.block_ptr, values)
     if values is not None:
-        fig.colorbar(coll, ax=ax, label=_label(res, color), shrink=0.7)
+        fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.7)
     if trails:
         _trails(ax, res, index)
     allv = verts.reshape(-1, 2)
@@ -320,7 +321,7 @@ def fig_solid_model(res: Results, index: int = -1, color: str | None = "speed", 
     values = block_values(res, index, color)
     coll = plot_solid_blocks(ax, verts[index], res.mesh, values)
     if values is not None:
-        fig.colorbar(coll, ax=ax, label=_label(res, color), shrink=0.6)
+        fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.6)
     if trails:
         _trails(ax, res, index)
     solid_limits(ax, verts.reshape(-1, verts.shape[-1]))
@@ -362,7 +363,7 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
         for b in (range(y.shape[1]) if blocks is None else blocks):  # a colour per block, a style per run
             ax.plot(t, y[:, b], styles[r % len(styles)], color=f"C{b % 10}",
                     label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
-    ax.set(xlabel="time (s)", ylabel=_label(next(iter(runs.values())), quantity))
+    ax.set(xlabel="time (s)", ylabel=quantity_label(next(iter(runs.values())), quantity))
     if len(ax.get_lines()) <= MAX_LEGEND:
         fig.legend(fontsize="small", loc="outside right upper")
     return fig

@@ -129,7 +129,7 @@ class ContactStep:
             add_penalty_pairs(system, PenaltyPairs(a[closed], t_a, b[closed], t_b, gap, np.ones(int(closed.sum()))),
                               ctx.coeffs.c_p)
         sliding = self.state == SLIDING
-        # friction of this solve along the tangent, on v's block (kept for the ledger: friction_work)
+        # friction of this solve along the tangent, on v's block (kept for the ledger: work)
         self.friction = np.where(sliding, -self.sign * self.tan_phi * self.friction_normal, 0.0)
         if np.any(sliding):
             # Coulomb friction opposing the slip of v along the edge, N of the last solve (Shi 1988)
