@@ -33,3 +33,20 @@ def test_consistent_settings_give_no_warning() -> None:
         warnings.simplefilter("error")
         srdda.RunSettings(dt=1e-3, n_steps=10, method="srdda", secant_max_iterations=3, contact_penalty=1e9)
         srdda.RunSettings(dt=1e-3, n_steps=10, contacts=False)
+
+
+def test_the_cli_gives_a_settings_warning_as_one_line(tmp_path) -> None:
+    from click.testing import CliRunner
+
+    from srdda.cli import main
+
+    model = tmp_path / "m.toml"
+    model.write_text('[run]\ndt = 0.001\nsteps = 2\ncontacts = false\nshear_ratio = 0.2\n\n'
+                     '[materials.rock]\ndensity = 2000\nyoung = 1e9\npoisson = 0.2\n\n'
+                     '[[blocks]]\nmaterial = "rock"\nvertices = [[0, 0], [1, 0], [1, 1], [0, 1]]\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        res = CliRunner().invoke(main, ["check", str(model)])
+    assert res.exit_code == 0, res.output
+    assert "warning: contacts = false: shear_ratio has no effect\n" in res.output
+    assert "UserWarning" not in res.output and "pydantic" not in res.output

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -39,6 +40,13 @@ __all__ = ["main"]
 @click.version_option(__version__, prog_name="srdda")
 def main() -> None:
     """Discontinuous Deformation Analysis: DDA0, DDA1 and SRDDA (Fan, Zheng & Zhao 2017). SI units."""
+    warnings.showwarning = _show_warning
+
+
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int, file=None,
+                  line=None) -> None:
+    """A warning as one line on stderr, "warning: ...", without the source line it was raised at."""
+    click.echo(f"warning: {message}", err=True)
 
 
 def _load(path: str):
