@@ -360,9 +360,10 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
                              "or use fig_trajectories")
         names = ([f"point {k}" for k in range(y.shape[1])] if quantity.startswith("measured_")
                  else res.block_names)
-        for b in (range(y.shape[1]) if blocks is None else blocks):  # a colour per block, a style per run
-            ax.plot(t, y[:, b], styles[r % len(styles)], color=f"C{b % 10}",
-                    label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
+        for j, b in enumerate(range(y.shape[1]) if blocks is None else blocks):
+            # several runs: a colour per run, a line style per block; one run: a colour per block
+            style, color = (styles[j % len(styles)], f"C{r % 10}") if len(runs) > 1 else ("-", f"C{j % 10}")
+            ax.plot(t, y[:, b], style, color=color, label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
     ax.set(xlabel="time (s)", ylabel=quantity_label(next(iter(runs.values())), quantity))
     if len(ax.get_lines()) <= MAX_LEGEND:
         fig.legend(fontsize="small", loc="outside right upper")
@@ -481,7 +482,7 @@ def fig_nunchaku(results: Mapping[str, Results], hinge_points: tuple[int, int] =
         c = history(res, "measured_position")[:, tip_point]
         ax13.plot(c[:, 0], c[:, 1], lw=0.9, label=method_label(method))
     ax13.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title="point C")
-    fig13.legend(loc="outside right upper", fontsize="small")
+    ax13.legend(loc="upper center", fontsize="small")  # the swing leaves the middle above the lowest point empty
     if title:
         fig12.suptitle(title)
         fig13.suptitle(title)

@@ -47,7 +47,7 @@ FigureList = list[tuple[str, Figure]]  # (caption, figure)
 FigureMaker = Callable[[dict[str, Result], Model], FigureList]
 FIGURES: dict[str, FigureMaker] = {}
 CONFIG_FIGURES = {"pendulum": "3", "rod": "5", "sine-wave": "7", "nunchaku": "11", "rockfall": "14"}
-MAX_OMEGA_BLOCKS = 4  # the ω-against-time figure is drawn for models of at most this many blocks
+MAX_OMEGA_BLOCKS = 4  # the ω-against-time figure is drawn for models of at most this many moving blocks
 
 
 def register_figures(name: str) -> Callable[[FigureMaker], FigureMaker]:
@@ -105,8 +105,8 @@ def _balance_summary(results: dict[str, Result]) -> str:
     return "; ".join(parts)
 
 
-def _common(results: dict[str, Result]) -> FigureList:
-    """Figures every example gets: the energy ledger and the angular velocities per method."""
+def _common(results: dict[str, Result], model: Model) -> FigureList:
+    """Figures every example gets: the energy ledger and the moving blocks' angular velocities per method."""
     figs = [("Energy ledger per method, one panel per entry on its own scale (J per m of thickness): stored "
              "energies (the gravity potential is the moving blocks', from their initial centroid heights: "
              "fixed blocks excluded), the cumulative work that entered (loads, prescribed motion, hinge forces), "
@@ -116,11 +116,12 @@ def _common(results: dict[str, Result]) -> FigureList:
              "Entries that stay zero are left out; methods that agree draw on top of each other (solid DDA0, "
              "dashed DDA1, dotted SRDDA). E₀ is the initial energy above the datum. Largest balance "
              f"error: {_balance_summary(results)}.", plotting.fig_energy_ledger(results))]
-    first = next(iter(results.values()))
-    if len(first.block_names) <= MAX_OMEGA_BLOCKS:
-        figs.append(("Angular velocity ω (rad/s) of every block against time, per method.",
+    moving = np.flatnonzero(~model.arrays().block_fixed)
+    if 0 < len(moving) <= MAX_OMEGA_BLOCKS:
+        figs.append(("Angular velocity ω (rad/s) of every moving block against time: a colour per method, "
+                     "a line style per block.",
                      plotting.fig_time_series({plotting.method_label(m): r for m, r in results.items()},
-                                              "velocity.omega")))
+                                              "velocity.omega", blocks=moving)))
     return figs
 
 
@@ -220,7 +221,7 @@ def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = ME
                         "purple diamonds, point loads orange triangles, measured points red dots (P0, P1, ... in "
                         "the order the model lists them); a slender model's left end is enlarged below it.",
                         plotting.fig_configuration(model.arrays(), example.title))]
-            figures += FIGURES.get(name, _generic)(results, model) + _common(results)
+            figures += FIGURES.get(name, _generic)(results, model) + _common(results, model)
         except Exception as exc:
             errors.append(f"figures: {type(exc).__name__}: {exc}")
         out.append(ExampleRun(name, example.title, results, rows, figures, wall, files, errors, example.notes))
