@@ -395,14 +395,15 @@ def _zoom(ax: plt.Axes, main: plt.Axes, paths: Sequence[np.ndarray], colors: Seq
 
 def fig_swing_trajectories(results: Mapping[str, Results], pivot: Sequence[float] = (0.0, 0.0),
                            points: Sequence[int] | None = None, zoom: float | None = None,
-                           title: str = "") -> Figure:
+                           title: str = "", names: Sequence[str] | None = None) -> Figure:
     """Figs. 4 and 6: measured-point paths per method with a zoomed view, and their radial offset.
 
     Top row: the paths (a pendulum's B; a rod's B and C); middle row: the
     first point's paths enlarged around its lowest point, where DDA0's
     to-and-fro paths part. Bottom row: the distance of each point from the
     pivot minus its initial value (m) against time, which measures that offset
-    (zero for an exact rigid swing).
+    (zero for an exact rigid swing). ``names``: the measured points' names
+    (default "point 0", "point 1", ...).
     """
     colors = ["tab:blue", "tab:red", "tab:green", "tab:orange"]
     fig, axes = _columns(len(results), rows=3, size=(4.2, 3.3))
@@ -413,7 +414,7 @@ def fig_swing_trajectories(results: Mapping[str, Results], pivot: Sequence[float
         paths = [mp[:, k] for k in idx]
         ax = axes[0, col]
         for k, xy, c in zip(idx, paths, colors):
-            ax.plot(xy[:, 0], xy[:, 1], color=c, lw=0.9, label=f"point {k}")
+            ax.plot(xy[:, 0], xy[:, 1], color=c, lw=0.9, label=names[k] if names else f"point {k}")
         ax.plot(*pivot, "k^")
         ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {method_label(method)}")
         reach = float(np.max(np.linalg.norm(paths[0] - pivot, axis=1)))
@@ -421,7 +422,7 @@ def fig_swing_trajectories(results: Mapping[str, Results], pivot: Sequence[float
         t = history(res, "time")
         for k, xy, c in zip(idx, paths, colors):
             r = np.linalg.norm(xy - pivot, axis=1)
-            axes[2, col].plot(t, r - r[0], color=c, lw=0.9, label=f"point {k}")
+            axes[2, col].plot(t, r - r[0], color=c, lw=0.9)
         axes[2, col].set(xlabel="time (s)", ylabel="radial offset (m)")
     fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside upper center", ncols=4, fontsize="small")
     if title:

@@ -130,15 +130,15 @@ def _pendulum(results: dict[str, Result], model: Model) -> FigureList:
     return [("Fig. 4: trajectories of point B (x, y in m) by (a) DDA0, (b) DDA1, (c) SRDDA; middle: the same "
              "enlarged at the lowest point; bottom: B's distance from the pivot A minus its "
              "initial value (m) against time.",
-             plotting.fig_swing_trajectories(results, pivot=_pivot(model)))]
+             plotting.fig_swing_trajectories(results, pivot=_pivot(model), names=("B",)))]
 
 
 @register_figures("rod")
 def _rod(results: dict[str, Result], model: Model) -> FigureList:
-    return [("Fig. 6: trajectories of points B (centroid, point 0) and C (tip, point 1) (x, y in m) by (a) DDA0, "
+    return [("Fig. 6: trajectories of points B (centroid, blue) and C (tip, red) (x, y in m) by (a) DDA0, "
              "(b) DDA1, (c) SRDDA; middle: B's paths enlarged at its lowest point; bottom: "
              "each point's distance from the pivot A minus its initial value (m) against time.",
-             plotting.fig_swing_trajectories(results, pivot=_pivot(model)))]
+             plotting.fig_swing_trajectories(results, pivot=_pivot(model), names=("B", "C")))]
 
 
 @register_figures("sine-wave")
@@ -218,9 +218,10 @@ def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = ME
             paper_fig = f" (the paper's Fig. {CONFIG_FIGURES[name]})" if name in CONFIG_FIGURES else ""
             figures = [(f"The model as built for these runs{paper_fig}: fixed blocks grey, fixed points black "
                         "triangles, springs green lines between open circles, hinges black rings, driven points "
-                        "purple diamonds, point loads orange triangles, measured points red dots (P0, P1, ... in "
-                        "the order the model lists them); a slender model's left end is enlarged below it.",
-                        plotting.fig_configuration(model.arrays(), example.title))]
+                        "purple diamonds, point loads orange triangles, measured points red dots with the paper's "
+                        "names (else P0, P1, ... in the order the model lists them); a slender model with springs, "
+                        "hinges or driven points has them enlarged below it.",
+                        plotting.fig_configuration(model.arrays(), example.title, example.point_names or None))]
             figures += FIGURES.get(name, _generic)(results, model) + _common(results, model)
         except Exception as exc:
             errors.append(f"figures: {type(exc).__name__}: {exc}")

@@ -51,6 +51,7 @@ class Example:
     model_file: str | None = None  # under examples_dir() / "paper"
     builder: Callable[[str], tuple[Model, RunSettings]] | None = None
     notes: str = ""  # the choices made where the paper is silent, for the report (Markdown)
+    point_names: tuple[str, ...] = ()  # the paper's names of the measured points, in order (figures)
 
     def build(self, method: str) -> tuple[Model, RunSettings]:
         """The model and run settings of this example for ``method``."""

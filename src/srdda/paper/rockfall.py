@@ -138,7 +138,7 @@ def tables(results: dict[str, Result]) -> list[Row]:
 
 
 ROCKFALL = register(Example(
-    "rockfall", "4.5 Rockfall", tables, builder=build,
+    "rockfall", "4.5 Rockfall", tables, builder=build, point_names=("P1", "P2"),
     notes="The paper gives neither the stone's shape, size and start nor the joint's friction: ours is a "
           "0.4 × 0.3 m stone above the ledge, φ = 30°. Table 6 (free flight) compares exactly; Table 7 and "
           "the contact steps only qualitatively. Steps are accepted steps (g2 = 0.001 cuts them). "
