@@ -233,14 +233,19 @@ def _draw_configuration(ax: plt.Axes, arrays: Any, labels: Sequence[str] | None)
     if len(mr):
         ax.plot(*pts[mr].T, "o", color="tab:red", ms=4, label="measured point")
         names = list(labels) if labels else [f"P{k}" for k in range(len(mr))]
-        places: dict[tuple[float, float], list[str]] = {}
+        places: dict[tuple[float, ...], list[int]] = {}
         scale = float(np.ptp(arrays.vertices, axis=0).max() or 1.0)
         for k, p in enumerate(pts[mr]):
-            places.setdefault(tuple(np.round(p / (1e-6 * scale)).tolist()), []).append(names[k])
-        for key, group in places.items():
-            p = np.asarray(key) * 1e-6 * scale
-            ax.annotate(", ".join(group), p, xytext=(4, 6), textcoords="offset points", color="tab:red",
-                        fontsize=8)
+            places.setdefault(tuple(np.round(p / (1e-6 * scale)).tolist()), []).append(k)
+        # each label points away from its block's centroid (a corner's outwards, a centroid's up-right),
+        # so that the labels of points of one block part
+        away = pts[mr] - arrays.moments(arrays.vertices).centroid[arrays.point_block[mr]]
+        for group in places.values():
+            d = away[group[0]]
+            d = d / np.hypot(*d) if np.hypot(*d) > 1e-9 * scale else np.array([0.6, 0.8])
+            ax.annotate(", ".join(names[k] for k in group), pts[mr][group[0]], xytext=tuple(9 * d),
+                        textcoords="offset points", color="tab:red", fontsize=8,
+                        ha="left" if d[0] >= 0 else "right", va="bottom" if d[1] >= 0 else "top")
     ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal")
 
 
