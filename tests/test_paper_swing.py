@@ -74,7 +74,7 @@ def test_paper_json_document_shape():
     assert res.exit_code == 0, res.output
     doc = json.loads(res.output)
     assert doc["example"] == "rod"
-    keys = {"table", "quantity", "step", "method", "ours", "paper", "exact"}
+    keys = {"table", "quantity", "step", "method", "ours", "paper", "exact", "unit"}
     assert all(set(r) == keys for r in doc["rows"])
     omega = [r for r in doc["rows"] if r["quantity"] == "omega_max_left_to_right"]
     assert omega[0]["step"] is None and omega[0]["method"] == "dda1"

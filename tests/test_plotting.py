@@ -46,11 +46,13 @@ def test_swing_trajectories_draw_each_method_and_the_offset(rod_runs) -> None:
         top = fig.axes[col]
         path = _data_lines(top)[0].get_xydata()
         np.testing.assert_array_equal(path, rod_runs[method].array("measured_position")[:, 0])
-        assert len(top.child_axes) == 1 and _data_lines(top.child_axes[0])  # the zoomed view
+        zoom = fig.axes[3 + col]  # the zoomed view: the same path, limits around its lowest point
+        np.testing.assert_array_equal(_data_lines(zoom)[0].get_xydata(), path)
+        assert zoom.get_ylim()[0] <= path[:, 1].min() <= zoom.get_ylim()[1]
     # dda0's rod lengthens (area grows as 1 + Δr² per step): its tip's radial offset is the largest
-    offsets = [np.max(np.abs(_data_lines(fig.axes[3 + c])[0].get_xydata()[:, 1])) for c in range(3)]
+    offsets = [np.max(np.abs(_data_lines(fig.axes[6 + c])[0].get_xydata()[:, 1])) for c in range(3)]
     assert offsets[0] > offsets[1] and offsets[0] > offsets[2]
-    _check(fig, 6)
+    _check(fig, 9)
 
 
 def test_wave_shapes_plot_the_centroid_displacement_at_each_step() -> None:
@@ -87,10 +89,10 @@ def test_nunchaku_figures() -> None:
     runs = {m: srdda.run(_nunchaku_model(), srdda.RunSettings(dt=2e-3, n_steps=150, method=m, penalty=2e14))
             for m in METHODS}
     fig12, fig13 = plotting.fig_nunchaku(runs)
-    omega = _data_lines(fig12.axes[3])
+    omega = _data_lines(fig12.axes[6])
     assert len(omega) == 2  # one ω line per stick
     np.testing.assert_array_equal(omega[1].get_ydata(), runs["dda0"].array("velocity")[:, 1, 2])
-    _check(fig12, 6)
+    _check(fig12, 9)
     assert len(_data_lines(fig13.axes[0])) == 3
     _check(fig13, 1)
 
@@ -143,3 +145,17 @@ def test_any_run_model_trajectories_and_time_series(tmp_path) -> None:
         plotting.history(res, "velocity.nope")
     with pytest.raises(ValueError, match="vertex history"):
         plotting.fig_model(srdda.run(two_block_model(), settings))
+
+
+def test_every_quantity_has_a_unit_and_colour_bars_say_it(tmp_path) -> None:
+    path = tmp_path / "r.h5"
+    settings = srdda.RunSettings(dt=1e-3, n_steps=10, method="srdda")
+    srdda.run(two_block_model(), settings, recorders=[ResultsStore(path, settings)])
+    res = read_results(path)
+    units = {name: plotting.quantity_unit(res, name) for name in plotting.quantity_names(res)}
+    assert units["stress.sxx"] == "Pa" and units["velocity.omega"] == "rad/s" and units["energy.total"] == "J/m"
+    fig = plotting.fig_model(res, color="stress.sxx")
+    assert fig.axes[1].get_ylabel() == "stress.sxx (Pa)"
+    matplotlib.pyplot.close(fig)
+    with pytest.raises(KeyError, match="no unit known for 'nope'"):
+        plotting.quantity_unit(res, "nope")

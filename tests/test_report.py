@@ -21,9 +21,9 @@ def _stub_tables(results):
     rows = []
     for m, res in results.items():
         rows.append({"table": "Table S1", "quantity": "area", "step": 100, "method": m,
-                     "ours": float(res.area[100][0]), "paper": 1.000093, "exact": 1.0})
+                     "ours": float(res.area[100][0]), "paper": 1.000093, "exact": 1.0, "unit": "m²"})
         rows.append({"table": "Table S2", "quantity": "omega", "step": None, "method": m,
-                     "ours": float(res.velocity[-1][0, 2]), "paper": None, "exact": None})
+                     "ours": float(res.velocity[-1][0, 2]), "paper": None, "exact": None, "unit": "rad/s"})
     return rows
 
 
@@ -64,11 +64,12 @@ def test_report_is_written_from_its_own_runs(tmp_path: Path, stub_examples: list
 
 
 def test_pivot_table_puts_ours_beside_the_paper() -> None:
-    rows = [{"table": "T", "quantity": "w", "step": None, "method": m, "ours": o, "paper": p, "exact": 2.0}
-            for m, o, p in (("dda0", 1.9, 1.95), ("srdda", 2.002, 2.1))]
+    rows = [{"table": "T", "quantity": "w", "step": None, "method": m, "ours": o, "paper": p, "exact": 2.0,
+             "unit": "rad/s"} for m, o, p in (("dda0", 1.9, 1.95), ("srdda", 2.002, 2.1))]
     header, body = pivot_table(rows, ["dda0", "srdda"])
-    assert header == ["quantity", "CS", "exact", "DDA0 ours", "DDA0 paper", "SRDDA ours", "SRDDA paper"]
-    assert body == [["w", "", "2.000000", "1.90000000 (-5.0000%)", "1.95 (-2.5000%)",
+    assert header == ["quantity", "unit", "CS (step)", "exact", "DDA0 ours", "DDA0 paper", "SRDDA ours",
+                      "SRDDA paper"]
+    assert body == [["w", "rad/s", "", "2.000000", "1.90000000 (-5.0000%)", "1.95 (-2.5000%)",
                      "2.00200000 (+0.1000%)", "2.1 (+5.0000%)"]]
 
 
@@ -77,3 +78,31 @@ def test_examples_are_listed_in_the_papers_order() -> None:
     assert [e.title.split()[0] for e in EXAMPLES.values()] == ["4.1", "4.2", "4.3", "4.4", "4.5"]
     # each says, in the report, what it chose where the paper is silent
     assert all(len(e.notes) > 40 for e in EXAMPLES.values())
+
+
+UNIT = re.compile(r"\([^()]+\)\s*$")  # a label ends with its unit in parentheses: "y (m)", "kinetic (kJ/m)"
+
+
+def _axes_without_units(figures) -> list[str]:
+    missing = []
+    for caption, fig in figures:
+        for ax in fig.axes:
+            if not ax.get_visible() or not (ax.lines or ax.collections):
+                continue  # removed or empty panels draw nothing to read
+            for which, label in (("x", ax.get_xlabel()), ("y", ax.get_ylabel())):
+                if not UNIT.search(label):
+                    missing.append(f"{caption[:40]!r}: {which} label {label!r} of {ax.get_title()!r}")
+    return missing
+
+
+def test_every_report_axis_and_table_column_has_a_unit(tmp_path: Path, stub_examples: list[str]) -> None:
+    from srdda.report import FIGURES, _runs_table, run_examples
+
+    run_ = run_examples(stub_examples[:1], METHODS)[0]
+    rod_figures = FIGURES["rod"](run_.results, rod_model())  # the paper's swing figure on the same runs
+    assert _axes_without_units(run_.figures + rod_figures) == []
+    assert len(run_.figures) >= 3  # model, trajectories per method, energy ledger, ω
+    header, _ = _runs_table(run_)
+    assert all(UNIT.search(h) for h in header if h not in ("method", "status", "results file"))
+    header, body = pivot_table(run_.rows, METHODS)
+    assert header[1] == "unit" and all(row[1] for row in body)

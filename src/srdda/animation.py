@@ -20,8 +20,8 @@ import numpy as np  # noqa: E402
 from matplotlib import animation  # noqa: E402
 
 from .io.results_store import StoredResult, read_results  # noqa: E402
-from .plotting import (block_values, history, plot_blocks, plot_solid_blocks, solid_faces,  # noqa: E402
-                       solid_limits, step_title)
+from .plotting import (block_values, history, plot_blocks, plot_solid_blocks, quantity_label,  # noqa: E402
+                       solid_faces, solid_limits, step_title)
 
 __all__ = ["animate", "ffmpeg_path"]
 
@@ -84,7 +84,7 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
     if values is not None:
         all_values = np.concatenate([block_values(res, int(i), color) for i in frames])
         coll.set_clim(float(all_values.min()), float(all_values.max()) or 1.0)
-        fig.colorbar(coll, ax=ax, label=color)
+        fig.colorbar(coll, ax=ax, label=quantity_label(res, color))
     trails = [ax.plot([], [], lw=0.8)[0] for _ in range(mp.shape[1])]
     allv = verts[frames].reshape(-1, 2)
     pad = 0.05 * float(np.ptp(allv, axis=0).max() or 1.0)
@@ -118,7 +118,7 @@ def _write_solid_animation(res: StoredResult, out: Path, writer: animation.Abstr
     if values is not None:
         all_values = np.concatenate([block_values(res, int(i), color) for i in frames])
         coll.set_clim(float(all_values.min()), float(all_values.max()) or 1.0)
-        fig.colorbar(coll, ax=ax, label=color, shrink=0.6)
+        fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.6)
     trails = [ax.plot([], [], [], lw=0.8)[0] for _ in range(mp.shape[1])]
     solid_limits(ax, verts[frames].reshape(-1, verts.shape[-1]))
 

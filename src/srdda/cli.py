@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -39,6 +40,13 @@ __all__ = ["main"]
 @click.version_option(__version__, prog_name="srdda")
 def main() -> None:
     """Discontinuous Deformation Analysis: DDA0, DDA1 and SRDDA (Fan, Zheng & Zhao 2017). SI units."""
+    warnings.showwarning = _show_warning
+
+
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int, file=None,
+                  line=None) -> None:
+    """A warning as one line on stderr, "warning: ...", without the source line it was raised at."""
+    click.echo(f"warning: {message}", err=True)
 
 
 def _load(path: str):
@@ -210,11 +218,12 @@ def _pct(x: float | None) -> str:
 
 def print_rows(rows: list[dict]) -> None:
     """Print table rows as aligned text, ours beside the paper's, with relative errors."""
-    header = ("table", "quantity", "step", "method", "ours", "paper", "exact", "RE ours", "RE paper")
+    header = ("table", "quantity", "unit", "step", "method", "ours", "paper", "exact", "RE ours", "RE paper")
     lines = [header]
     for r in rows:
         digits = 0 if isinstance(r["paper"], int) else 6  # counts (contact steps) print as counts
-        lines.append((r["table"], r["quantity"], "-" if r["step"] is None else str(r["step"]), r["method"],
+        lines.append((r["table"], r["quantity"], r.get("unit", "-"), "-" if r["step"] is None else str(r["step"]),
+                      r["method"],
                       _fmt(r["ours"], digits), _fmt(r["paper"], digits), _fmt(r["exact"], digits),
                       _pct(relative_error(r["ours"], r["exact"])),
                       _pct(None if r["paper"] is None else relative_error(r["paper"], r["exact"]))))

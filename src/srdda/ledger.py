@@ -3,7 +3,8 @@
 Balance (J per metre of thickness in 2D):
 
     E(t) = kinetic + gravitational + elastic strain + springs and penalties + contacts
-    E(t) - E(0) = W_loads + W_prescribed + W_constraints - D_dashpots - D_numerical
+    E(t) - E(0) = W_loads + W_prescribed + W_constraints - D_dashpots - D_friction - D_contact - D_springs
+                  - D_numerical
 
 Every term reports its stored energy (:attr:`srdda.term.Term.energy_kind`)
 and its work per step (:meth:`srdda.term.Term.work`):
@@ -11,10 +12,26 @@ W_loads: point loads and the base-acceleration body force, Σ F(t_load)·Δx wit
 Δx the exact displacement; W_prescribed: the drivers of prescribed points,
 -μ·Δx for multiplier rows and -p·g_mid·Δx_target for penalty drivers;
 W_constraints: hinge and pin forces, -μ·(Δx_a - Δx_b), zero for an exactly
-kept constraint (srdda, dda0), not for dda1's post-adjustment; D_dashpots:
-c|Δx_rel|²/Δt per step. D_numerical is what is left: the time scheme's and the
-linearisation's own dissipation or drift, so ``balance`` =
-E - W_loads - W_prescribed - W_constraints + D_dashpots stays at E(0) when it is zero.
+kept constraint (srdda, dda0), not for dda1's post-adjustment; D_dashpots
+(``dissipated``): c|Δx_rel|²/Δt per step; D_friction (``dissipated_friction``):
+the work the sliding contacts' Coulomb forces took out, -Σ F·Δs with F the
+friction force of the step's last solve and Δs the slip of the contact vertex
+along the edge over the step (:meth:`srdda.contact.term.ContactStep.work`);
+D_contact (``dissipated_contact``) and D_springs (``dissipated_springs``): the
+work the contact penalty springs and the springs (fixed points, point springs,
+springs) did on the blocks with their step force -k(g + c_p·Δg), minus the
+change of their stored energy: ½k|Δg|² per step with c_p = 1 (DDA's impact
+loss at contacts), plus what state changes or a point update other than T·Δd
+(dda1) put in or took out (:meth:`srdda.constraints.springs.SpringTerm.work`).
+D_numerical is what is left: the time scheme's and the linearisation's own
+dissipation or drift, so ``balance`` = E - W_loads - W_prescribed -
+W_constraints + D_dashpots + D_friction + D_contact + D_springs stays at E(0)
+when it is zero.
+
+The gravitational energy is -Σ m g·c over every block, fixed ones included
+(their share is a constant): only its changes have a meaning. The report
+(:func:`srdda.plotting.fig_energy_ledger`) draws it from the initial centroid
+heights of the moving blocks.
 """
 from __future__ import annotations
 
@@ -43,7 +60,8 @@ def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[s
     out["total"] = sum(out[k] for k in ENERGY_KINDS)
     out.update(zip(LEDGER, map(float, state.ledger)))
     out["balance"] = out["total"] - out["work_loads"] - out["work_prescribed"] - out["work_constraints"] \
-        + out["dissipated"]
+        + out["dissipated"] + out["dissipated_friction"] + out["dissipated_contact"] \
+        + out["dissipated_springs"]
     return out
 
 

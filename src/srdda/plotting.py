@@ -15,7 +15,12 @@ order of the ``results`` mapping):
                                 angular velocities, point C of all methods
 :func:`fig_rockfall`            Fig. 15: trajectories of P1 and P2 over the
                                 slope
+:func:`fig_energy_ledger`       every run: the energy ledger, one panel per
+                                entry (stored, work in, dissipated, error)
 =============================  ===========================================
+
+Every axis carries its SI unit (:func:`quantity_unit`); energies are J per
+metre of thickness in 2D, J in 3D.
 """
 from __future__ import annotations
 
@@ -35,7 +40,8 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 __all__ = ["history", "quantity_names", "block_values", "method_label", "plot_blocks", "fig_configuration",
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
            "fig_trajectories", "fig_time_series", "plot_bolts", "fig_bolt_forces",
-           "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index"]
+           "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index",
+           "quantity_unit", "quantity_label", "fig_energy_ledger", "ledger_series", "LEDGER_PANELS"]
 
 Results = Any  # Result or StoredResult: both have .array(name), .block_names, .method
 Background = tuple[np.ndarray, np.ndarray]  # (vertices, block_ptr) of blocks drawn grey (slopes, ground)
@@ -84,6 +90,42 @@ def quantity_names(res: Results) -> list[str]:
             + [f"{v}.{c}" for v in ("centroid", "measured_position", "measured_velocity") for c in XY])
 
 
+_UNITS = {"time": "s", "step": "step", "area": "m²", "rotation": "rad", "iterations": "solves",
+          "velocity.vx": "m/s", "velocity.vy": "m/s", "velocity.omega": "rad/s", "velocity.exx_rate": "1/s",
+          "velocity.eyy_rate": "1/s", "velocity.gxy_rate": "1/s", "stress": "Pa", "centroid": "m",
+          "measured_position": "m", "measured_velocity": "m/s", "closed_contacts": "contacts",
+          "max_penetration": "m", "multipliers": "N/m", "speed": "m/s", "area_change": "1",
+          "bolt_force": "N", "bolt_shear_force": "N", "bolt_broken": "1", "bolt_break_time": "s"}
+
+
+def _dim(res: Results) -> int:
+    return int(np.asarray(res.array("centroid")).shape[-1])
+
+
+def quantity_unit(res: Results, name: str) -> str:
+    """SI unit of a :func:`history` name (or ``speed``, ``area_change``) of ``res``, for axis labels.
+
+    Energies are J per metre of thickness in 2D and J in 3D; ``area`` is m² in
+    2D and the volume (m³) in 3D.
+    """
+    base = name.split(".", 1)[0]
+    if base == "energy":
+        return "J/m" if _dim(res) == 2 else "J"
+    if name == "area" and _dim(res) == 3:
+        return "m³"
+    if name == "multipliers" and _dim(res) == 3:
+        return "N"
+    unit = _UNITS.get(name, _UNITS.get(base))
+    if unit is None:
+        raise KeyError(f"no unit known for {name!r}")
+    return unit
+
+
+def quantity_label(res: Results, name: str) -> str:
+    """An axis or colour-bar label: the quantity's name and its unit, ``"stress.sxx (Pa)"``."""
+    return f"{name} ({quantity_unit(res, name)})"
+
+
 def step_index(res: Results, step: int) -> int:
     """Row of the recorded step ``step`` (the nearest recorded one at or before it)."""
     steps = np.asarray(res.array("step"))
@@ -127,22 +169,66 @@ def block_values(res: Results, index: int, color: str | None) -> np.ndarray | No
 
 
 def fig_configuration(arrays: Any, title: str = "", labels: Sequence[str] | None = None) -> Figure:
-    """The model before the run (paper Figs. 3, 5, 7, 11, 14): blocks, supports, springs, measured points.
+    """The model before the run (paper Figs. 3, 5, 7, 11, 14): blocks, supports, springs, hinges, points.
 
     ``arrays`` is a :class:`~srdda.model.ModelArrays`. Fixed blocks are grey,
-    fixed points black triangles, point-spring ends open circles, point loads
-    arrows, measured points red dots labelled with ``labels`` (default P0, P1...).
+    fixed points black triangles, springs green lines between open circles,
+    hinges and pins black rings, driven (prescribed-motion) points purple
+    diamonds, point loads orange triangles, measured points red dots labelled
+    with ``labels`` (default P0, P1...; points at one place share one label).
+    A slender model (20 times longer than high) with springs, hinges or driven
+    points gets a second panel: a tenth of its length around the leftmost of
+    them, enlarged, where they can be told apart.
     """
-    fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
-    colors = np.where(arrays.block_fixed, "0.8", "#c8d6e5")
+    lo, hi = arrays.vertices.min(axis=0), arrays.vertices.max(axis=0)
+    width, height = hi - lo
+    links = arrays.links
+    details = np.concatenate([arrays.points[rows] for rows in (
+        links.prescribed_rows, arrays.spring_rows_a, links.spring_rows_a, links.hinge_rows_a)])
+    # a slender model with springs, hinges or driven points: those crowd at the full model's scale
+    slender = width > 20 * max(height, 1e-12) and len(details) > 0
+    fig, axes = plt.subplots(2 if slender else 1, 1, figsize=(7, 6.5 if slender else 4.5), layout="constrained",
+                             squeeze=False)
+    _draw_configuration(axes[0, 0], arrays, labels)
+    axes[0, 0].set_title(title)
+    pad = 0.05 * max(width, height)
+    half = max(height, width / 6.0) / 2 + pad  # a 10 m rod 0.1 m thick gets a readable height
+    mid = 0.5 * (lo[1] + hi[1])
+    axes[0, 0].set(xlim=(lo[0] - pad, hi[0] + pad), ylim=(mid - half, mid + half))
+    if slender:  # enlarged below: a tenth of the model around its first detail (from the left)
+        zoom = axes[1, 0]
+        _draw_configuration(zoom, arrays, labels)
+        span = width / 10
+        x0 = float(np.clip(details[:, 0].min() - span / 2, lo[0] - 0.02 * span, hi[0] + 0.02 * span - span))
+        zoom.set(xlim=(x0, x0 + span), ylim=(mid - span / 6, mid + span / 6),
+                 title=f"enlarged: x from {x0:.3g} to {x0 + span:.3g} m")
+        axes[0, 0].indicate_inset((x0, mid - span / 6, span, span / 3), edgecolor="0.4")
+    handles, names = axes[0, 0].get_legend_handles_labels()
+    if handles:
+        fig.legend(handles, names, fontsize="small", loc="outside lower center", ncols=4)
+    return fig
+
+
+def _draw_configuration(ax: plt.Axes, arrays: Any, labels: Sequence[str] | None) -> None:
+    """Blocks, supports, springs, hinges, driven, loaded and measured points of ``arrays`` on ``ax``."""
     coll = plot_blocks(ax, arrays.vertices, arrays.block_ptr)
-    coll.set_facecolor(list(colors))
+    coll.set_facecolor(list(np.where(arrays.block_fixed, "0.8", "#c8d6e5")))
     pts = arrays.points
+    links = arrays.links
     if len(arrays.fixed_rows):
         ax.plot(*pts[arrays.fixed_rows].T, "k^", ms=8, label="fixed point")
-    springs = np.concatenate([arrays.spring_rows_a, arrays.spring_rows_b])
-    if len(springs):
-        ax.plot(*pts[springs].T, "o", mfc="none", mec="tab:green", ms=7, label="spring end")
+    ends_a = np.concatenate([arrays.spring_rows_a, links.spring_rows_a]).astype(np.int64)
+    ends_b = np.concatenate([arrays.spring_rows_b, links.spring_rows_b]).astype(np.int64)
+    if len(ends_a):
+        segments = np.full((3 * len(ends_a), 2), np.nan)  # a - b - gap, drawn as one line
+        segments[0::3], segments[1::3] = pts[ends_a], pts[ends_b]
+        ax.plot(*segments.T, "-", color="tab:green", lw=1.2, label="spring")
+        ax.plot(*pts[np.concatenate([ends_a, ends_b])].T, "o", mfc="none", mec="tab:green", ms=6,
+                label="spring end")
+    if links.n_hinges:
+        ax.plot(*pts[links.hinge_rows_a].T, "o", mfc="white", mec="k", mew=1.5, ms=9, label="hinge / pin")
+    if len(links.prescribed_rows):
+        ax.plot(*pts[links.prescribed_rows].T, "D", color="tab:purple", ms=6, label="driven point")
     if len(arrays.load_rows):
         ax.plot(*pts[arrays.load_rows].T, "v", color="tab:orange", ms=7, label="point load")
     links = arrays.links
@@ -154,21 +240,21 @@ def fig_configuration(arrays: Any, title: str = "", labels: Sequence[str] | None
     mr = arrays.measured_rows
     if len(mr):
         ax.plot(*pts[mr].T, "o", color="tab:red", ms=4, label="measured point")
+        names = list(labels) if labels else [f"P{k}" for k in range(len(mr))]
+        places: dict[tuple[float, ...], list[int]] = {}
+        scale = float(np.ptp(arrays.vertices, axis=0).max() or 1.0)
         for k, p in enumerate(pts[mr]):
-            ax.annotate(labels[k] if labels else f"P{k}", p, xytext=(4, 4), textcoords="offset points",
-                        color="tab:red", fontsize=8)
-    ax.set(xlabel="x (m)", ylabel="y (m)", title=title, aspect="equal")
-    # slender models (a 10 m rod 0.1 m thick) get a readable height: at least 1/6 of the width
-    lo, hi = arrays.vertices.min(axis=0), arrays.vertices.max(axis=0)
-    width, height = hi - lo
-    pad = 0.05 * max(width, height)
-    half = max(height, width / 6.0) / 2 + pad
-    mid = 0.5 * (lo[1] + hi[1])
-    ax.set_xlim(lo[0] - pad, hi[0] + pad)
-    ax.set_ylim(mid - half, mid + half)
-    if ax.get_legend_handles_labels()[0]:
-        fig.legend(fontsize="small", loc="outside lower center", ncols=4)
-    return fig
+            places.setdefault(tuple(np.round(p / (1e-6 * scale)).tolist()), []).append(k)
+        # each label points away from its block's centroid (a corner's outwards, a centroid's up-right),
+        # so that the labels of points of one block part
+        away = pts[mr] - arrays.moments(arrays.vertices).centroid[arrays.point_block[mr]]
+        for group in places.values():
+            d = away[group[0]]
+            d = d / np.hypot(*d) if np.hypot(*d) > 1e-9 * scale else np.array([0.6, 0.8])
+            ax.annotate(", ".join(names[k] for k in group), pts[mr][group[0]], xytext=tuple(9 * d),
+                        textcoords="offset points", color="tab:red", fontsize=8,
+                        ha="left" if d[0] >= 0 else "right", va="bottom" if d[1] >= 0 else "top")
+    ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal")
 
 
 def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails: bool = True) -> Figure:
@@ -188,7 +274,7 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     values = block_values(res, index, color)
     coll = plot_blocks(ax, verts[index], res.block_ptr, values)
     if values is not None:
-        fig.colorbar(coll, ax=ax, label=color, shrink=0.7)
+        fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.7)
     if trails:
         _trails(ax, res, index)
     if "bolt_ends" in res.histories and res.bolt_ends.shape[1]:
@@ -283,7 +369,7 @@ def fig_solid_model(res: Results, index: int = -1, color: str | None = "speed", 
     values = block_values(res, index, color)
     coll = plot_solid_blocks(ax, verts[index], res.mesh, values)
     if values is not None:
-        fig.colorbar(coll, ax=ax, label=color, shrink=0.6)
+        fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.6)
     if trails:
         _trails(ax, res, index)
     solid_limits(ax, verts.reshape(-1, verts.shape[-1]))
@@ -300,8 +386,8 @@ def fig_trajectories(res: Results, points: str = "measured", title: str | None =
     for k in range(xy.shape[1]):
         ax.plot(xy[:, k, 0], xy[:, k, 1], lw=1.0, label=labels[k])
     ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal", title=title or f"{method_label(res.method)}: {points}")
-    if xy.shape[1]:
-        ax.legend(fontsize="small")
+    if 0 < xy.shape[1] <= MAX_LEGEND:
+        fig.legend(fontsize="small", loc="outside right upper")
     return fig
 
 
@@ -310,7 +396,8 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
     """A recorded quantity against time, one line per block (or measured point; ``blocks`` picks them)."""
     runs = runs if isinstance(runs, Mapping) else {method_label(runs.method): runs}
     fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
-    for label, res in runs.items():
+    styles = ("-", "--", ":", "-.")
+    for r, (label, res) in enumerate(runs.items()):
         t = history(res, "time")
         y = history(res, quantity)
         if y.ndim == 1:
@@ -322,11 +409,13 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
         names = ([f"point {k}" for k in range(y.shape[1])] if quantity.startswith("measured_")
                  else (getattr(res, "bolt_names", ()) or [f"bolt {k}" for k in range(y.shape[1])])
                  if quantity.startswith("bolt_") else res.block_names)
-        for b in (range(y.shape[1]) if blocks is None else blocks):
-            ax.plot(t, y[:, b], label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
-    ax.set(xlabel="time (s)", ylabel=quantity)
+        for j, b in enumerate(range(y.shape[1]) if blocks is None else blocks):
+            # several runs: a colour per run, a line style per block; one run: a colour per block
+            style, color = (styles[j % len(styles)], f"C{r % 10}") if len(runs) > 1 else ("-", f"C{j % 10}")
+            ax.plot(t, y[:, b], style, color=color, label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
+    ax.set(xlabel="time (s)", ylabel=quantity_label(next(iter(runs.values())), quantity))
     if len(ax.get_lines()) <= MAX_LEGEND:
-        ax.legend(fontsize="small")
+        fig.legend(fontsize="small", loc="outside right upper")
     return fig
 
 
@@ -343,31 +432,30 @@ def _zoom_box(xy: np.ndarray, width: float) -> tuple[float, float, float, float]
     return x0 - width / 2, x0 + width / 2, y0 - width / 4, y0 + 3 * width / 4
 
 
-def _inset(ax: plt.Axes, paths: Sequence[np.ndarray], colors: Sequence[str], box: tuple[float, float, float, float],
-           ) -> plt.Axes:
-    ins = ax.inset_axes([0.32, 0.3, 0.36, 0.36])
-    for xy, c in zip(paths, colors):
-        ins.plot(xy[:, 0], xy[:, 1], color=c, lw=0.8)
-    ins.set_xlim(box[0], box[1])
-    ins.set_ylim(box[2], box[3])
-    ins.tick_params(labelsize=6)
-    ins.set_title("zoom", fontsize=7)
-    ax.indicate_inset_zoom(ins, edgecolor="0.4")
-    return ins
+def _zoom(ax: plt.Axes, main: plt.Axes, paths: Sequence[np.ndarray], colors: Sequence[str],
+          box: tuple[float, float, float, float], widths: Sequence[float] | None = None) -> None:
+    """The paths inside ``box`` (x0, x1, y0, y1) drawn on ``ax``, the box marked on ``main``."""
+    for k, (xy, c) in enumerate(zip(paths, colors)):
+        ax.plot(xy[:, 0], xy[:, 1], color=c, lw=widths[k] if widths else 0.9)
+    ax.set(xlim=box[:2], ylim=box[2:], xlabel="x (m)", ylabel="y (m)",
+           title=f"zoom: {box[1] - box[0]:.3g} m wide at the lowest point")
+    main.indicate_inset((box[0], box[2], box[1] - box[0], box[3] - box[2]), edgecolor="0.3")
 
 
 def fig_swing_trajectories(results: Mapping[str, Results], pivot: Sequence[float] = (0.0, 0.0),
                            points: Sequence[int] | None = None, zoom: float | None = None,
-                           title: str = "") -> Figure:
+                           title: str = "", names: Sequence[str] | None = None) -> Figure:
     """Figs. 4 and 6: measured-point paths per method with a zoomed view, and their radial offset.
 
-    Top row: the paths (a pendulum's B; a rod's B and C) with an inset around
-    the lowest point, where DDA0's to-and-fro paths part. Bottom row: the
-    distance of each point from the pivot minus its initial value (m) against
-    time, which measures that offset (zero for an exact rigid swing).
+    Top row: the paths (a pendulum's B; a rod's B and C); middle row: the
+    first point's paths enlarged around its lowest point, where DDA0's
+    to-and-fro paths part. Bottom row: the distance of each point from the
+    pivot minus its initial value (m) against time, which measures that offset
+    (zero for an exact rigid swing). ``names``: the measured points' names
+    (default "point 0", "point 1", ...).
     """
     colors = ["tab:blue", "tab:red", "tab:green", "tab:orange"]
-    fig, axes = _columns(len(results), rows=2)
+    fig, axes = _columns(len(results), rows=3, size=(4.2, 3.3))
     pivot = np.asarray(pivot, dtype=float)
     for col, (method, res) in enumerate(results.items()):
         mp = history(res, "measured_position")
@@ -375,17 +463,17 @@ def fig_swing_trajectories(results: Mapping[str, Results], pivot: Sequence[float
         paths = [mp[:, k] for k in idx]
         ax = axes[0, col]
         for k, xy, c in zip(idx, paths, colors):
-            ax.plot(xy[:, 0], xy[:, 1], color=c, lw=0.9, label=f"point {k}")
+            ax.plot(xy[:, 0], xy[:, 1], color=c, lw=0.9, label=names[k] if names else f"point {k}")
         ax.plot(*pivot, "k^")
         ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {method_label(method)}")
         reach = float(np.max(np.linalg.norm(paths[0] - pivot, axis=1)))
-        _inset(ax, paths, colors, _zoom_box(paths[0], zoom or 0.02 * reach))
-        ax.legend(fontsize="small", loc="upper right")
+        _zoom(axes[1, col], ax, paths, colors, _zoom_box(paths[0], zoom or 0.02 * reach))
         t = history(res, "time")
         for k, xy, c in zip(idx, paths, colors):
             r = np.linalg.norm(xy - pivot, axis=1)
-            axes[1, col].plot(t, r - r[0], color=c, lw=0.9, label=f"point {k}")
-        axes[1, col].set(xlabel="time (s)", ylabel="radial offset (m)")
+            axes[2, col].plot(t, r - r[0], color=c, lw=0.9)
+        axes[2, col].set(xlabel="time (s)", ylabel="radial offset (m)")
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside upper center", ncols=4, fontsize="small")
     if title:
         fig.suptitle(title)
     return fig
@@ -417,32 +505,34 @@ def fig_nunchaku(results: Mapping[str, Results], hinge_points: tuple[int, int] =
                  zoom: float | None = None, title: str = "") -> tuple[Figure, Figure]:
     """Figs. 12 and 13: hinge points B1, B2 per method with a zoom, the sticks' ω; point C of all methods.
 
-    Returns (Fig. 12: top row paths of B1 (blue) and B2 (red), bottom row the
-    angular velocity of each stick against time; Fig. 13: paths of C).
+    Returns (Fig. 12: top row paths of B1 (blue, wide) and B2 (red), middle
+    row the same enlarged at B1's lowest point, bottom row the angular velocity
+    of each stick against time; Fig. 13: paths of C).
     """
-    fig12, axes = _columns(len(results), rows=2)
+    fig12, axes = _columns(len(results), rows=3, size=(4.2, 3.3))
     for col, (method, res) in enumerate(results.items()):
         mp = history(res, "measured_position")
         paths = [mp[:, hinge_points[0]], mp[:, hinge_points[1]]]
         ax = axes[0, col]
-        for xy, c, lab in zip(paths, ("tab:blue", "tab:red"), ("B1", "B2")):
-            ax.plot(xy[:, 0], xy[:, 1], color=c, lw=0.9, label=lab)
+        for xy, c, lab, lw in zip(paths, ("tab:blue", "tab:red"), ("B1", "B2"), (2.4, 0.9)):
+            ax.plot(xy[:, 0], xy[:, 1], color=c, lw=lw, label=lab)  # B1 wide below B2: both show where they meet
         ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {method_label(method)}")
         reach = float(np.ptp(paths[0], axis=0).max() or 1.0)
-        _inset(ax, paths, ("tab:blue", "tab:red"), _zoom_box(paths[0], zoom or 0.05 * reach))
-        ax.legend(fontsize="small", loc="upper right")
+        _zoom(axes[1, col], ax, paths, ("tab:blue", "tab:red"), _zoom_box(paths[0], zoom or 0.05 * reach),
+              widths=(2.4, 0.9))
         t = history(res, "time")
         omega = history(res, "velocity.omega")
-        for b, name in enumerate(res.block_names):
-            axes[1, col].plot(t, omega[:, b], lw=0.9, label=name)
-        axes[1, col].set(xlabel="time (s)", ylabel="ω (1/s)")
-        axes[1, col].legend(fontsize="small")
+        for b, (name, c) in enumerate(zip(res.block_names, ("tab:green", "tab:purple", "tab:brown", "tab:gray"))):
+            axes[2, col].plot(t, omega[:, b], lw=0.9, color=c, label=f"ω of {name}")
+        axes[2, col].set(xlabel="time (s)", ylabel="ω (rad/s)")
+    (paths_h, paths_l), (omega_h, omega_l) = (axes[r, 0].get_legend_handles_labels() for r in (0, 2))
+    fig12.legend(paths_h + omega_h, paths_l + omega_l, loc="outside upper center", ncols=4, fontsize="small")
     fig13, ax13 = plt.subplots(figsize=(6, 5), layout="constrained")
     for method, res in results.items():
         c = history(res, "measured_position")[:, tip_point]
         ax13.plot(c[:, 0], c[:, 1], lw=0.9, label=method_label(method))
     ax13.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title="point C")
-    ax13.legend(fontsize="small")
+    ax13.legend(loc="upper center", fontsize="small")  # the swing leaves the middle above the lowest point empty
     if title:
         fig12.suptitle(title)
         fig13.suptitle(title)
@@ -461,8 +551,95 @@ def fig_rockfall(results: Mapping[str, Results], background: Background | None =
         for k, c, lab in zip(points, ("tab:blue", "tab:red"), ("P1", "P2")):
             ax.plot(mp[:, k, 0], mp[:, k, 1], color=c, lw=0.8, label=lab)
         ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"({'abc'[col % 3]}) {method_label(method)}")
-        ax.legend(fontsize="small")
         ax.autoscale_view()
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside upper center", ncols=2, fontsize="small")
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+# -- the energy ledger --------------------------------------------------------------
+# (key, panel title): stored energies, work that entered, energy taken out, what is left (srdda.ledger)
+LEDGER_PANELS = (
+    ("kinetic", "kinetic energy"),
+    ("potential", "gravity potential of the moving blocks\n(datum: their initial centroid heights)"),
+    ("elastic", "strain energy of the blocks"),
+    ("spring", "springs and penalty supports"),
+    ("contact", "contact springs (stored)"),
+    ("work_loads", "work of loads and base acceleration (in)"),
+    ("work_prescribed", "work of prescribed motion (in)"),
+    ("work_constraints", "work of hinge forces (in)"),
+    ("dissipated", "dissipated by dashpots"),
+    ("dissipated_friction", "dissipated by friction"),
+    ("dissipated_contact", "taken out by the contact penalty\n(impacts, springs released stretched)"),
+    ("dissipated_springs", "taken out by the springs' step force\n(negative: put in by the point update)"),
+    ("error", "balance error: E − E₀ − W_in + D\n(time scheme, linearisation)"),
+)
+
+
+def ledger_series(res: Results) -> dict[str, np.ndarray]:
+    """The energy ledger of a run as the series of :data:`LEDGER_PANELS` (one value per recorded step).
+
+    ``potential`` is the gravity energy minus its initial value: the fixed
+    blocks' share is a constant and drops out, so it is the moving blocks'
+    potential from their initial centroid heights. ``error`` is the balance
+    minus its initial value (zero when the ledger closes; negative when energy
+    is lost unaccounted). A results file written before a ledger entry existed
+    gives zeros for it.
+    """
+    energy = np.asarray(res.array("energy"))
+    names = _energy_names(res)
+
+    def col(name: str) -> np.ndarray:
+        return energy[:, names.index(name)] if name in names else np.zeros(len(energy))
+
+    out = {key: col(key) for key, _ in LEDGER_PANELS if key not in ("potential", "error")}
+    out["potential"] = col("gravity") - col("gravity")[0]
+    out["error"] = col("balance") - col("balance")[0]
+    return out
+
+
+def _si_prefix(largest: float) -> tuple[float, str]:
+    """The power of 1000 and its SI prefix that bring ``largest`` into [1, 1000) (n ... G)."""
+    exponent = 0 if largest <= 0 else int(np.clip(3 * np.floor(np.log10(largest) / 3), -9, 9))
+    return 10.0 ** exponent, {-9: "n", -6: "µ", -3: "m", 0: "", 3: "k", 6: "M", 9: "G"}[exponent]
+
+
+def fig_energy_ledger(results: Results | Mapping[str, Results], title: str = "") -> Figure:
+    """The energy ledger: one panel per entry with its own scale, the methods overlaid.
+
+    Each stored energy, each cumulative work and dissipation and the balance
+    error gets its own axes, so that a large entry (a stiff spring) does not
+    flatten a small one; entries that stay zero in every run are left out (the
+    balance error never is). Panels in the order of :data:`LEDGER_PANELS`.
+    """
+    runs = results if isinstance(results, Mapping) else {results.method: results}
+    series = {m: ledger_series(r) for m, r in runs.items()}
+    largest = max(float(np.max(np.abs(v), initial=0.0)) for s in series.values() for v in s.values())
+    keep = [(k, t) for k, t in LEDGER_PANELS
+            if k == "error" or any(np.max(np.abs(s[k]), initial=0.0) > 1e-9 * largest for s in series.values())]
+    ncols = min(3, len(keep))
+    nrows = -(-len(keep) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(4.3 * ncols, 2.7 * nrows + 0.6), layout="constrained",
+                             squeeze=False, sharex=True)
+    first = next(iter(runs.values()))
+    unit = quantity_unit(first, "energy")
+    for ax, (key, panel) in zip(axes.flat, keep):
+        factor, prefix = _si_prefix(max(float(np.max(np.abs(s[key]), initial=0.0)) for s in series.values()))
+        for (method, res), style in zip(runs.items(), ("-", "--", ":", "-.") * len(runs)):
+            ax.plot(history(res, "time"), series[method][key] / factor, style, lw=0.9, label=method_label(method))
+        ax.set_title(panel, fontsize=9)
+        ax.set_ylabel(f"{key} ({prefix}{unit})", fontsize=8)
+        ax.tick_params(labelsize=8)
+        ax.ticklabel_format(axis="y", useOffset=False)
+    for ax in axes.flat[len(keep):]:
+        ax.remove()
+    for ax in axes.flat[: len(keep)]:  # every panel says its time axis: one glance, no counting rows
+        ax.set_xlabel("time (s)", fontsize=8)
+        ax.xaxis.set_tick_params(labelbottom=True)
+    if len(runs) > 1:
+        fig.legend(*axes.flat[0].get_legend_handles_labels(), loc="outside upper center", ncols=len(runs),
+                   fontsize="small")
     if title:
         fig.suptitle(title)
     return fig

@@ -48,7 +48,7 @@ FigureList = list[tuple[str, Figure]]  # (caption, figure)
 FigureMaker = Callable[[dict[str, Result], Model], FigureList]
 FIGURES: dict[str, FigureMaker] = {}
 CONFIG_FIGURES = {"pendulum": "3", "rod": "5", "sine-wave": "7", "nunchaku": "11", "rockfall": "14"}
-MAX_OMEGA_BLOCKS = 4  # the ω-against-time figure is drawn for models of at most this many blocks
+MAX_OMEGA_BLOCKS = 4  # the ω-against-time figure is drawn for models of at most this many moving blocks
 
 
 def register_figures(name: str) -> Callable[[FigureMaker], FigureMaker]:
@@ -91,50 +91,79 @@ def _fixed_blocks(model: Model) -> tuple[np.ndarray, np.ndarray] | None:
     return verts, np.concatenate([[0], np.cumsum(counts)])
 
 
-def _common(results: dict[str, Result]) -> FigureList:
-    """Figures every example gets: total energy and angular velocities per method."""
-    figs = [("Total energy (kinetic + gravity + elastic + springs) against time, per method: its drift is "
-             "numerical work.", plotting.fig_time_series(results, "energy.total"))]
-    first = next(iter(results.values()))
-    if len(first.block_names) <= MAX_OMEGA_BLOCKS:
-        figs.append(("Angular velocity of every block against time, per method.",
-                     plotting.fig_time_series(results, "velocity.omega")))
+def _balance_summary(results: dict[str, Result]) -> str:
+    """The largest balance error of each run, in J/m and relative to its initial and peak kinetic energy."""
+    parts = []
+    for method, res in results.items():
+        ledger = plotting.ledger_series(res)
+        unit = plotting.quantity_unit(res, "energy")
+        initial = sum(float(ledger[k][0]) for k in ("kinetic", "elastic", "spring", "contact"))
+        error = float(np.max(np.abs(ledger["error"])))
+        shares = [f"{100 * error / v:.2g}% of {what}" for v, what in
+                  ((initial, "E₀"), (float(np.max(ledger["kinetic"])), "the peak kinetic energy")) if v > 0]
+        parts.append(f"{plotting.method_label(method)} {error:.3g} {unit}"
+                     + (f" ({', '.join(shares)})" if shares else ""))
+    return "; ".join(parts)
+
+
+def _common(results: dict[str, Result], model: Model) -> FigureList:
+    """Figures every example gets: the energy ledger and the moving blocks' angular velocities per method."""
+    figs = [("Energy ledger per method, one panel per entry on its own scale (J per m of thickness): stored "
+             "energies (the gravity potential is the moving blocks', from their initial centroid heights: "
+             "fixed blocks excluded), the cumulative work that entered (loads, prescribed motion, hinge forces), "
+             "the cumulative energy taken out (dashpots, friction, the contact penalty's impact loss, the "
+             "springs' step force) and the "
+             "balance error E − E₀ − W_in + D (the time scheme's and the linearisation's own loss or gain). "
+             "Entries that stay zero are left out; methods that agree draw on top of each other (solid DDA0, "
+             "dashed DDA1, dotted SRDDA). E₀ is the initial energy above the datum. Largest balance "
+             f"error: {_balance_summary(results)}.", plotting.fig_energy_ledger(results))]
+    moving = np.flatnonzero(~model.arrays().block_fixed)
+    if 0 < len(moving) <= MAX_OMEGA_BLOCKS:
+        figs.append(("Angular velocity ω (rad/s) of every moving block against time: a colour per method, "
+                     "a line style per block.",
+                     plotting.fig_time_series({plotting.method_label(m): r for m, r in results.items()},
+                                              "velocity.omega", blocks=moving)))
     return figs
 
 
 @register_figures("pendulum")
 def _pendulum(results: dict[str, Result], model: Model) -> FigureList:
-    return [("Fig. 4: trajectories of point B by (a) DDA0, (b) DDA1, (c) SRDDA, zoomed at the lowest point; "
-             "bottom: B's distance from the pivot A minus its initial value.",
-             plotting.fig_swing_trajectories(results, pivot=_pivot(model)))]
+    return [("Fig. 4: trajectories of point B (x, y in m) by (a) DDA0, (b) DDA1, (c) SRDDA; middle: the same "
+             "enlarged at the lowest point; bottom: B's distance from the pivot A minus its "
+             "initial value (m) against time.",
+             plotting.fig_swing_trajectories(results, pivot=_pivot(model), names=("B",)))]
 
 
 @register_figures("rod")
 def _rod(results: dict[str, Result], model: Model) -> FigureList:
-    return [("Fig. 6: trajectories of points B (centroid) and C (tip) by (a) DDA0, (b) DDA1, (c) SRDDA, zoomed "
-             "at the lowest point; bottom: distance from the pivot A minus its initial value.",
-             plotting.fig_swing_trajectories(results, pivot=_pivot(model)))]
+    return [("Fig. 6: trajectories of points B (centroid, blue) and C (tip, red) (x, y in m) by (a) DDA0, "
+             "(b) DDA1, (c) SRDDA; middle: B's paths enlarged at its lowest point; bottom: "
+             "each point's distance from the pivot A minus its initial value (m) against time.",
+             plotting.fig_swing_trajectories(results, pivot=_pivot(model), names=("B", "C")))]
 
 
 @register_figures("sine-wave")
 def _wave(results: dict[str, Result], model: Model) -> FigureList:
-    return [(f"Fig. {8 + i}: the bar chain's transverse displacement at CS {s} "
-             f"({i + 1} period{'s' if i else ''} of the driving sine).",
+    return [(f"Fig. {8 + i}: the bar chain's transverse displacement v (m) of each bar's centroid against its "
+             f"position x (m) at CS {s} ({i + 1} period{'s' if i else ''} of the driving sine), per method.",
              plotting.fig_wave_shapes(results, steps=(s,))) for i, s in enumerate((300, 600, 900))]
 
 
 @register_figures("nunchaku")
 def _nunchaku(results: dict[str, Result], model: Model) -> FigureList:
     fig12, fig13 = plotting.fig_nunchaku(results)
-    return [("Fig. 12: trajectories of the hinge points B1 (blue) and B2 (red), zoomed; bottom: angular "
-             "velocity of each stick.", fig12),
-            ("Fig. 13: trajectories of point C by DDA0, DDA1 and SRDDA.", fig13)]
+    return [("Fig. 12: trajectories of the hinge points B1 (wide blue line) and B2 (thin red line on top) "
+             "(x, y in m), per method; middle: the same enlarged at B1's lowest point: where "
+             "the hinge holds, red runs inside blue; bottom: angular velocity ω (rad/s) of each stick against "
+             "time.", fig12),
+            ("Fig. 13: trajectories of point C (x, y in m) by DDA0, DDA1 and SRDDA.", fig13)]
 
 
 @register_figures("rockfall")
 def _rockfall(results: dict[str, Result], model: Model) -> FigureList:
-    return [("Fig. 15: trajectories of P1 (centroid, blue) and P2 (vertex, red) by (a) DDA0, (b) DDA1, "
-             "(c) SRDDA.", plotting.fig_rockfall(results, background=_fixed_blocks(model)))]
+    return [("Fig. 15: trajectories of P1 (centroid, blue) and P2 (vertex, red) (x, y in m) over the fixed slope "
+             "(grey) by (a) DDA0, (b) DDA1, (c) SRDDA.",
+             plotting.fig_rockfall(results, background=_fixed_blocks(model)))]
 
 
 def _generic(results: dict[str, Result], model: Model) -> FigureList:
@@ -188,10 +217,13 @@ def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = ME
             errors.append(f"tables: {type(exc).__name__}: {exc}")
         try:
             paper_fig = f" (the paper's Fig. {CONFIG_FIGURES[name]})" if name in CONFIG_FIGURES else ""
-            figures = [(f"The model as built for these runs{paper_fig}: fixed blocks grey, fixed points "
-                        "triangles, spring ends circles, measured points red.",
-                        plotting.fig_configuration(model.arrays(), example.title))]
-            figures += FIGURES.get(name, _generic)(results, model) + _common(results)
+            figures = [(f"The model as built for these runs{paper_fig}: fixed blocks grey, fixed points black "
+                        "triangles, springs green lines between open circles, hinges black rings, driven points "
+                        "purple diamonds, point loads orange triangles, measured points red dots with the paper's "
+                        "names (else P0, P1, ... in the order the model lists them); a slender model with springs, "
+                        "hinges or driven points has them enlarged below it.",
+                        plotting.fig_configuration(model.arrays(), example.title, example.point_names or None))]
+            figures += FIGURES.get(name, _generic)(results, model) + _common(results, model)
         except Exception as exc:
             errors.append(f"figures: {type(exc).__name__}: {exc}")
         out.append(ExampleRun(name, example.title, results, rows, figures, wall, files, errors, example.notes))
@@ -215,22 +247,24 @@ def _re(value: float | None, exact: float | None) -> str:
 
 
 def pivot_table(rows: Sequence[dict], methods: Sequence[str]) -> tuple[list[str], list[list[str]]]:
-    """Rows of one paper table laid out as quantity, CS, exact, then ours | paper per method.
+    """Rows of one paper table laid out as quantity, unit, CS, exact, then ours | paper per method.
 
-    Values carry two more decimals than the paper prints; the relative error
-    to the exact value follows in parentheses where there is one.
+    Every value of a row is in the row's ``unit`` (SI; ``step`` for a step
+    count). Values carry two more decimals than the paper prints; the relative
+    error to the exact value follows in parentheses where there is one.
     """
     keys: dict[tuple[str, object], dict] = {}
     for r in rows:
-        entry = keys.setdefault((r["quantity"], r["step"]), {"exact": r["exact"]})
+        entry = keys.setdefault((r["quantity"], r["step"]), {"exact": r["exact"], "unit": r.get("unit", "")})
         entry[r["method"]] = r
-    header = ["quantity", "CS", "exact"]
+    header = ["quantity", "unit", "CS (step)", "exact"]
     for m in methods:
         header += [f"{plotting.method_label(m)} ours", f"{plotting.method_label(m)} paper"]
     body = []
     for (quantity, step), entry in keys.items():
         exact = entry["exact"]
-        line = [str(quantity), "" if step is None else str(step), "" if exact is None else f"{exact:.6f}"]
+        line = [str(quantity), entry["unit"], "" if step is None else str(step),
+                "" if exact is None else f"{exact:.6f}"]
         for m in methods:
             r = entry.get(m)
             if r is None:
@@ -280,7 +314,7 @@ def _html_table(header: list[str], body: list[list[str]]) -> str:
 
 
 def _runs_table(run_: ExampleRun) -> tuple[list[str], list[list[str]]]:
-    header = ["method", "status", "recorded steps", "last step", "wall time (s)", "results file"]
+    header = ["method", "status", "recorded steps (count)", "last step (step)", "wall time (s)", "results file"]
     body = []
     for m, res in run_.results.items():
         body.append([plotting.method_label(m), res.status, str(len(res.step)), str(res.step[-1] if res.step else ""),
@@ -304,7 +338,8 @@ def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str
     stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     intro = (f"Every number and figure below comes from runs made by `{command}` on {stamp} "
              f"(machine: {_machine()}). 'ours' is this run, 'paper' is Fan, Zheng & Zhao (2017); "
-             "relative errors to the exact value are in parentheses.")
+             "relative errors to the exact value are in parentheses. Every value of a table row is in the "
+             "row's unit (SI); CS is the step number.")
     if total_seconds is not None:
         intro += f" Total wall time: {total_seconds:.1f} s."
     md = ["# srdda: the paper's examples reproduced", "", intro, ""]

@@ -6,12 +6,18 @@ writes ``steps`` for ``n_steps``), and the CLI replaces fields of it with
 :func:`dataclasses.replace`, which validates again. Every value the run uses
 is checked here, once, with a message naming the field: a time step that is
 not finite or out of range, a solver that is not installed, a step-cut factor
-that would never shrink the step, ``rho_inf`` with a scheme that ignores it.
+that would never shrink the step, ``rho_inf`` with a scheme that ignores it,
+both ``contact_penalty`` and ``auto_penalty``, ``min_dt`` not below ``dt``
+(errors); contact settings with ``contacts = false`` and
+``secant_max_iterations`` without the secant linearisation (warnings: they
+have no effect).
 Times in s, stiffnesses in N/m; a model file may write ``"2 ms"``.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
+import warnings
 from typing import Annotated, Literal
 
 from pydantic import AfterValidator, AliasChoices, BeforeValidator, ConfigDict, Field, model_validator
@@ -55,6 +61,12 @@ Seconds = Annotated[float, _unit("time"), Finite]
 NewtonsPerMetre = Annotated[float, _unit("stiffness"), Finite]
 Degrees = Annotated[float, _unit("angle"), Finite]
 Ratio = Annotated[float, Finite]
+
+
+# the settings only the contacts use: changed with contacts = false, they have no effect
+CONTACT_FIELDS = ("contact_penalty", "auto_penalty", "shear_ratio", "contact_distance_factor",
+                  "contact_angle_tolerance", "penetration_fraction", "open_close_max_iterations",
+                  "friction_tolerance", "open_close_freeze_after", "open_close_settle_after")
 
 
 @dataclass(frozen=True, config=ConfigDict(extra="forbid", populate_by_name=True))
@@ -106,6 +118,21 @@ class RunSettings:
             raise ValueError(f"rho_inf = {self.rho_inf} has no effect with the 'shi' time scheme (method "
                              f"{self.method!r}, scheme {method.scheme.name!r}); set rho_inf = 1, or use scheme "
                              "'paper' or 'chung-hulbert'")
+        if self.contact_penalty is not None and self.auto_penalty is not None:
+            raise ValueError(f"give contact_penalty ({self.contact_penalty:g} N/m) or auto_penalty "
+                             f"({self.auto_penalty:g} × the largest Young's modulus), not both")
+        if self.min_dt is not None and self.min_dt >= self.dt:
+            raise ValueError(f"min_dt = {self.min_dt:g} s must be below dt = {self.dt:g} s (the run stops "
+                             "when a cut step falls below min_dt)")
+        defaults = {f.name: f.default for f in dataclasses.fields(RunSettings)}
+        if not self.contacts:
+            unused = [n for n in CONTACT_FIELDS if getattr(self, n) != defaults[n]]
+            if unused:
+                warnings.warn(f"contacts = false: {', '.join(unused)} {'has' if len(unused) == 1 else 'have'} "
+                              "no effect", UserWarning, stacklevel=2)
+        if method.linearization != "secant" and self.secant_max_iterations != defaults["secant_max_iterations"]:
+            warnings.warn(f"secant_max_iterations has no effect with method {self.method!r} (linearisation "
+                          f"{method.linearization!r}; srdda's secant pass uses it)", UserWarning, stacklevel=2)
         return self
 
     def resolved_method(self) -> Method:

@@ -38,7 +38,8 @@ __all__ = ["StepContext", "Term", "StepCut", "ENERGY_KINDS", "LEDGER"]
 
 ENERGY_KINDS = ("kinetic", "gravity", "elastic", "spring", "contact")
 # Work that enters or leaves over the run (J per m in 2D, J in 3D), see srdda.ledger.
-LEDGER = ("work_loads", "work_prescribed", "work_constraints", "dissipated")
+LEDGER = ("work_loads", "work_prescribed", "work_constraints", "dissipated", "dissipated_friction",
+          "dissipated_contact", "dissipated_springs")
 
 
 @dataclass

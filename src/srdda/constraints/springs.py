@@ -130,14 +130,49 @@ class SpringTerm(Term):
         return spring_energy(arrays, state.points, self.penalty)
 
     def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
-        links = ctx.arrays.links
-        if not (len(links.spring_rows_a) and np.any(links.spring_damping > 0)):
+        """Dashpots' dissipation (``dissipated``) and what the springs' step force took out (``dissipated_springs``).
+
+        The springs act on the blocks with -k(g + c_p·Δg), Δg the linearised
+        change T·Δd of their stretch: their work minus the change of their stored
+        energy is what the step's spring force took out, ½k|Δg|² per step with
+        c_p = 1 (the schemes of the paper), or what a point update that differs
+        from T·Δd (dda1's post-adjusted rotations) put into them (negative).
+        """
+        arrays, links = ctx.arrays, ctx.arrays.links
+        if not (len(arrays.fixed_rows) or len(arrays.spring_rows_a) or len(links.spring_rows_a)):
             return None
-        dx = new.points - ctx.state.points
-        rel = dx[links.spring_rows_a] - dx[links.spring_rows_b]
-        _, _, unit = spring_geometry(links, ctx.state.points)
-        along = np.einsum("ni,ni->n", rel, unit)
-        sq = np.where(links.spring_axial, along**2, np.sum(rel**2, axis=1))
         out = np.zeros(len(LEDGER))
-        out[LEDGER.index("dissipated")] = float(np.sum(links.spring_damping * sq) / ctx.dt)
+        points, pb, c_p = ctx.state.points, arrays.point_block, ctx.coeffs.c_p
+
+        def moved(rows: np.ndarray) -> np.ndarray:  # T·Δd of the points ``rows`` (n, dim)
+            return np.einsum("nki,ni->nk", ctx.shape_at(pb[rows], points[rows]), dd[pb[rows]])
+
+        def step_work(k: np.ndarray, gap: np.ndarray, dg: np.ndarray) -> float:
+            return -float(np.sum(k[:, None] * (gap + c_p * dg) * dg))
+
+        work = 0.0
+        fr = arrays.fixed_rows
+        if len(fr):
+            work += step_work(fixed_point_stiffness(arrays, self.penalty), points[fr] - arrays.points[fr],
+                              moved(fr))
+        ra, rb = arrays.spring_rows_a, arrays.spring_rows_b
+        if len(ra):
+            work += step_work(arrays.spring_stiffness, points[ra] - points[rb], moved(ra) - moved(rb))
+        if len(links.spring_rows_a):
+            d, length, unit = spring_geometry(links, points)
+            rel = moved(links.spring_rows_a) - moved(links.spring_rows_b)
+            axial = links.spring_axial[:, None]
+            along = np.einsum("ni,ni->n", rel, unit)[:, None] * unit
+            dg = np.where(axial, along, rel)
+            gap = np.where(axial, (length - links.spring_rest)[:, None] * unit, d - links.spring_offset)
+            work += step_work(links.spring_stiffness, gap, dg)
+            force = links.spring_stiffness * (length - links.spring_rest)
+            geometric = np.where(links.spring_axial & (force > 0), force / np.where(length > 0, length, 1.0), 0.0)
+            work -= c_p * float(np.sum(geometric * np.sum((rel - along) ** 2, axis=1)))
+            dx = new.points - points
+            actual = dx[links.spring_rows_a] - dx[links.spring_rows_b]
+            sq = np.where(links.spring_axial, np.einsum("ni,ni->n", actual, unit) ** 2, np.sum(actual**2, axis=1))
+            out[LEDGER.index("dissipated")] = float(np.sum(links.spring_damping * sq) / ctx.dt)
+        stored = spring_energy(arrays, new.points, self.penalty) - spring_energy(arrays, points, self.penalty)
+        out[LEDGER.index("dissipated_springs")] = -work - stored
         return out

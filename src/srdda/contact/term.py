@@ -18,7 +18,7 @@ import numpy as np
 
 from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays
-from ..term import StepContext, StepCut, Term
+from ..term import LEDGER, StepContext, StepCut, Term
 from .broadphase import block_boxes, candidate_pairs
 from ..geometry.polygon import previous_vertex_index
 from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts
@@ -130,9 +130,11 @@ class ContactStep:
             add_penalty_pairs(system, PenaltyPairs(a[closed], t_a, b[closed], t_b, gap, np.ones(int(closed.sum()))),
                               ctx.coeffs.c_p)
         sliding = self.state == SLIDING
+        # friction of this solve along the tangent, on v's block (kept for the ledger: work)
+        self.friction = np.where(sliding, -self.sign * self.tan_phi * self.friction_normal, 0.0)
         if np.any(sliding):
             # Coulomb friction opposing the slip of v along the edge, N of the last solve (Shi 1988)
-            magnitude = -self.sign[sliding] * self.tan_phi[sliding] * self.friction_normal[sliding]
+            magnitude = self.friction[sliding]
             force = magnitude[:, None] * g.tangent[sliding]
             np.add.at(system.rhs, a[sliding], np.einsum("nki,nk->ni", tv[sliding], force))
             np.add.at(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tq[sliding], force))
@@ -203,16 +205,15 @@ class ContactStep:
 
     # -- after the step ---------------------------------------------------
     def commit(self) -> ContactSet:
-        """The contacts as they ended the accepted step."""
-        p = self.params
-        # a contact held closed in the open-close band (a gap below f0·w0, pulling) ends the step open:
-        # its spring's energy is dropped, never carried into the next step
-        held = (self.state != OPEN) & (p.normal_stiffness * self.gap > self.tension_force)
-        self.state = np.where(held, OPEN, self.state).astype(np.int8)
-        closed = self.state != OPEN
+        """The contacts as they ended the accepted step.
+
+        A contact held closed in the open-close band (a gap below f0·w0, pulling)
+        ends the step open: its spring's energy is dropped (counted as dissipated
+        by :meth:`work`), never carried into the next step.
+        """
+        energy = self.stored_energy()
+        self.state = np.where(self._held_in_band(), OPEN, self.state).astype(np.int8)
         locked = self.state == LOCKED
-        energy = 0.5 * p.normal_stiffness * float(np.sum(self.gap[closed] ** 2)) \
-            + 0.5 * p.shear_stiffness * float(np.sum(self.shear[locked] ** 2))
         found = self.found
         return ContactSet(found[:, FOUND_VERTEX], found[:, FOUND_EDGE], found[:, FOUND_KIND], self.state.copy(),
                           self.sign.copy(), self.reference.copy(), self.bonded & locked, self.normal_force.copy(),
@@ -222,6 +223,44 @@ class ContactStep:
     def max_penetration(self) -> float:
         pen = -self.gap[self.state != OPEN]
         return float(max(pen.max(), 0.0)) if len(pen) else 0.0
+
+    def _held_in_band(self) -> np.ndarray:
+        """Closed contacts in tension beyond their strength: held closed only by the open-close band."""
+        return (self.state != OPEN) & (self.params.normal_stiffness * self.gap > self.tension_force)
+
+    def stored_energy(self) -> float:
+        """J per m the contacts keep after the step: ½k_n g² of the closed contacts + ½k_s s² of the locked
+        ones, those held in the open-close band left out (they are committed open)."""
+        p = self.params
+        kept = ~self._held_in_band()
+        return 0.5 * p.normal_stiffness * float(np.sum(self.gap[(self.state != OPEN) & kept] ** 2)) \
+            + 0.5 * p.shear_stiffness * float(np.sum(self.shear[(self.state == LOCKED) & kept] ** 2))
+
+    def work(self, dd: np.ndarray, c_p: float) -> tuple[float, float]:
+        """Work (J per m) over the increments ``dd`` of the last solve's friction forces and contact springs.
+
+        The forces are those ``add_to`` put on the right-hand side: friction
+        on v's block at v and the opposite on the edge's block at the foot, so a
+        sliding contact gives -tanφ·N·|slip|; the springs' -k(g₀ + c_p·Δg) on the
+        closed contacts' normal gap and the locked ones' shear. The springs'
+        work minus the change of their stored energy is what the penalty took
+        out: c_p = 1 gives -½k·Δg² per step (the impact loss of the step's
+        backward-Euler spring force), plus the energy of springs that open or
+        unlock while stretched.
+        """
+        if self._shapes is None:
+            return 0.0, 0.0
+        tv, tq, _ = self._shapes
+        g = self.geometry
+        slip = np.einsum("nk,nk->n", g.tangent, np.einsum("nki,ni->nk", tv, dd[g.vertex_block])
+                         - np.einsum("nki,ni->nk", tq, dd[g.edge_block]))
+        friction = float(np.sum(self.friction * slip))
+        p = self.params
+        closed, locked = self.state != OPEN, self.state == LOCKED
+        dg, ds = self.gap - g.gap, self.shear - self.shear0
+        springs = -p.normal_stiffness * float(np.sum(((g.gap + c_p * dg) * dg)[closed])) \
+            - p.shear_stiffness * float(np.sum(((self.shear0 + c_p * ds) * ds)[locked]))
+        return friction, springs
 
 
 def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:
@@ -352,3 +391,18 @@ class ContactTerm(Term):
 
     def energy(self, arrays: ModelArrays, state: State) -> float:
         return state.contacts.energy if state.contacts is not None else 0.0
+
+    def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
+        """What the contacts took out over the step: by friction, and by their penalty springs.
+
+        ``dissipated_contact`` is the springs' negative work minus the change of
+        their stored energy (from the contacts at t to those of this step).
+        """
+        if self.step is None and ctx.state.contacts is None:
+            return None
+        friction, springs = (0.0, 0.0) if self.step is None else self.step.work(dd, ctx.coeffs.c_p)
+        stored = 0.0 if self.step is None else self.step.stored_energy()
+        out = np.zeros(len(LEDGER))
+        out[LEDGER.index("dissipated_friction")] = -friction
+        out[LEDGER.index("dissipated_contact")] = -springs - (stored - self.energy(ctx.arrays, ctx.state))
+        return out

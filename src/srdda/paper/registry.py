@@ -3,8 +3,9 @@
 An example is a model file under ``paper/`` of :func:`examples_dir` (or a Python builder)
 plus a ``tables(results)`` function that turns one :class:`~srdda.Result` per
 method into rows ``{"table", "quantity", "step", "method", "ours", "paper",
-"exact"}`` (``step`` None where a row is not tied to a step, ``exact`` None
-where there is no analytical value).
+"exact", "unit"}`` (``step`` None where a row is not tied to a step, ``exact`` None
+where there is no analytical value; ``unit`` the SI unit of the row's values,
+``step`` for a number of steps).
 """
 from __future__ import annotations
 
@@ -50,6 +51,7 @@ class Example:
     model_file: str | None = None  # under examples_dir() / "paper"
     builder: Callable[[str], tuple[Model, RunSettings]] | None = None
     notes: str = ""  # the choices made where the paper is silent, for the report (Markdown)
+    point_names: tuple[str, ...] = ()  # the paper's names of the measured points, in order (figures)
 
     def build(self, method: str) -> tuple[Model, RunSettings]:
         """The model and run settings of this example for ``method``."""

@@ -106,7 +106,8 @@ def contact_events(result: Result) -> list[int]:
 def _row(table: str, quantity: str, step: int | None, method: str, ours: float | None, paper: float | None,
          exact: float | None) -> Row:
     return {"table": table, "quantity": quantity, "step": step, "method": method,
-            "ours": None if ours is None else float(ours), "paper": paper, "exact": exact}
+            "ours": None if ours is None else float(ours), "paper": paper, "exact": exact,
+            "unit": "step" if quantity.endswith("_step") else "s" if quantity.endswith("_time") else "rad/s"}
 
 
 def tables(results: dict[str, Result]) -> list[Row]:
@@ -137,7 +138,7 @@ def tables(results: dict[str, Result]) -> list[Row]:
 
 
 ROCKFALL = register(Example(
-    "rockfall", "4.5 Rockfall", tables, builder=build,
+    "rockfall", "4.5 Rockfall", tables, builder=build, point_names=("P1", "P2"),
     notes="The paper gives neither the stone's shape, size and start nor the joint's friction: ours is a "
           "0.4 × 0.3 m stone above the ledge, φ = 30°. Table 6 (free flight) compares exactly; Table 7 and "
           "the contact steps only qualitatively. Steps are accepted steps (g2 = 0.001 cuts them). "

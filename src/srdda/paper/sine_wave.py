@@ -144,12 +144,12 @@ def tables(results: dict[str, Result]) -> list[Row]:
                 rows.append({"table": "Sine wave (4.3)", "quantity": f"period_{j + 1}", "step": step,
                              "method": method, "ours": period,
                              "paper": None if paper is None or j >= len(paper) else float(paper[j]),
-                             "exact": float(PERIOD_STEPS)})
+                             "exact": float(PERIOD_STEPS), "unit": "step"})
             if step == 600 and len(periods) == 2:  # the paper: DDA0 and DDA1 fit two periods in ~573 CS
                 rows.append({"table": "Sine wave (4.3)", "quantity": "two_periods", "step": step, "method": method,
                              "ours": periods[0] + periods[1],
                              "paper": float(sum(paper)) if paper is not None else float(PAPER_TWO_PERIODS_600),
-                             "exact": 2.0 * PERIOD_STEPS})
+                             "exact": 2.0 * PERIOD_STEPS, "unit": "step"})
     return rows
 
 

@@ -40,8 +40,9 @@ ROD_OMEGA = float(np.sqrt(3 * 10.0 / 10.0))  # thin rod of length 10 m
 
 def _row(table: str, quantity: str, step: int | None, method: str, ours: float, paper: float,
          exact: float | None) -> Row:
+    unit = "m²" if quantity.startswith("area") else "rad/s"  # block areas, or angular velocities
     return {"table": table, "quantity": quantity, "step": step, "method": method, "ours": float(ours),
-            "paper": paper, "exact": exact}
+            "paper": paper, "exact": exact, "unit": unit}
 
 
 def _area_at(result: Result, block: int, step: int) -> float:
@@ -83,11 +84,11 @@ def rod_tables(results: dict[str, Result]) -> list[Row]:
 
 
 PENDULUM = register(Example(
-    "pendulum", "4.1 Simple pendulum", pendulum_tables, model_file="pendulum.toml",
+    "pendulum", "4.1 Simple pendulum", pendulum_tables, model_file="pendulum.toml", point_names=("B",),
     notes="The exact ω_max is the paper's, for a point mass; the body modelled (a 0.2 m square bob tied by "
           "two point springs to a massless 9.90 × 0.05 m rod) has ω_max = 1.414166 (RE −0.0034%), the floor of "
           "any accurate method. The pivot is a fixed-point penalty spring. docs/paper-examples.md, 4.1."))
 ROD = register(Example(
-    "rod", "4.2 Swing of a slender rod", rod_tables, model_file="rod.toml",
+    "rod", "4.2 Swing of a slender rod", rod_tables, model_file="rod.toml", point_names=("B", "C"),
     notes="The exact ω_max is the paper's, for a thin rod; the 0.1 m thick rod modelled has "
           "ω_max = 1.732029 (RE −0.0013%). docs/paper-examples.md, 4.2."))

@@ -1,0 +1,101 @@
+"""Names that docstrings refer to (:attr:`...`, :meth:`...`, `Result.x`, ...) exist in the package."""
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import inspect
+import pkgutil
+import re
+import types
+
+import srdda
+
+ROLE = re.compile(r":(?:attr|meth|class|func|data|mod|exc):`~?(\.?[\w.]+)`")
+DOTTED = re.compile(r"(?<![`\w])``?([A-Z]\w*(?:\.\w+)+)``?(?![\w(`])")  # `Result.energy`, ``Model.add_hinge``
+
+
+# contact/springs.py is being reworked by the lead engineer (not ours to edit now): its docstring names
+# StepContext under srdda.simulation, where it lives in srdda.term; to fix there, then drop from this set
+KNOWN = {"srdda.contact.springs: srdda.simulation.StepContext.shape_at"}
+
+
+def _modules() -> list[types.ModuleType]:
+    names = [m.name for m in pkgutil.walk_packages(srdda.__path__, "srdda.")]
+    return [srdda] + [importlib.import_module(n) for n in names]
+
+
+def _has(obj: object, name: str) -> bool:
+    if hasattr(obj, name):
+        return True
+    fields = getattr(obj, "__dataclass_fields__", {})
+    return name in fields or name in getattr(obj, "__annotations__", {}) or any(
+        name in getattr(base, "__annotations__", {}) for base in getattr(obj, "__mro__", ()))
+
+
+def _resolve(path: str, module: types.ModuleType, owner: object, everywhere: dict[str, list[object]]) -> bool:
+    if path.startswith("."):  # relative to the module's package (a package's own module)
+        package = module.__name__ if hasattr(module, "__path__") else module.__package__
+        try:
+            importlib.import_module(path, package)
+            return True
+        except ImportError:
+            return False
+    head, *rest = path.split(".")
+    starts: list[object] = [owner] if owner is not None and not rest and _has(owner, head) else []
+    if head == "srdda":
+        starts = [srdda]
+    elif hasattr(module, head):
+        starts = [getattr(module, head)]
+    starts += everywhere.get(head, [])
+    for obj in starts:
+        ok = True
+        for part in rest:
+            if inspect.ismodule(obj) and not hasattr(obj, part):
+                try:
+                    obj = importlib.import_module(f"{obj.__name__}.{part}")
+                    continue
+                except ImportError:
+                    ok = False
+                    break
+            if not _has(obj, part):
+                ok = False
+                break
+            obj = getattr(obj, part, None)
+        if ok:
+            return True
+    return False
+
+
+def _docstrings(module: types.ModuleType):
+    """(where, docstring, the class a bare name may belong to) of the module and its classes and functions."""
+    yield module.__name__, module.__doc__ or "", None
+    for name, obj in vars(module).items():
+        if getattr(obj, "__module__", None) != module.__name__:
+            continue
+        if inspect.isclass(obj) or inspect.isfunction(obj):
+            yield f"{module.__name__}.{name}", obj.__doc__ or "", obj if inspect.isclass(obj) else None
+        if inspect.isclass(obj):
+            for attr, member in vars(obj).items():
+                doc = getattr(member, "__doc__", None) if isinstance(member, (types.FunctionType, property,
+                                                                             staticmethod, classmethod)) else None
+                if doc:
+                    yield f"{module.__name__}.{name}.{attr}", doc, obj
+
+
+def test_every_name_a_docstring_refers_to_exists() -> None:
+    modules = _modules()
+    everywhere: dict[str, list[object]] = {}
+    for m in modules:
+        everywhere.setdefault(m.__name__.rsplit(".", 1)[-1], []).append(m)
+        for name, obj in vars(m).items():
+            if inspect.isclass(obj) or inspect.isfunction(obj) or inspect.ismodule(obj):
+                everywhere.setdefault(name, []).append(obj)
+    unresolved = []
+    for m in modules:
+        for where, doc, owner in _docstrings(m):
+            for path in ROLE.findall(doc) + DOTTED.findall(doc):
+                if not _resolve(path, m, owner, everywhere):
+                    unresolved.append(f"{where}: {path}")
+    assert KNOWN <= set(unresolved), "fixed: drop it from KNOWN"
+    unresolved = sorted(set(unresolved) - KNOWN)
+    assert not unresolved, "\n".join(unresolved)
