@@ -225,40 +225,60 @@ def contact_geometry_3d(vertices: np.ndarray, mesh: PolyhedronMesh, topo: Polyhe
                                 edge_b, is_edge)
 
 
-def next_states_3d(state: np.ndarray, direction: np.ndarray, gap: np.ndarray, shear: np.ndarray, kn: float,
-                   ks: float, tan_phi: np.ndarray, cohesion_force: np.ndarray, tension_force: np.ndarray,
-                   closed_this_step: np.ndarray, friction_normal: np.ndarray, friction_tolerance: float = 1e-3
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """New (state, slip direction (n, 2), changed, unsettled) for end-of-step gaps and shear vectors (n, 2).
+def next_states_3d(state: np.ndarray, direction: np.ndarray, gap: np.ndarray, shear: np.ndarray,
+                   slip: np.ndarray, kn: float, ks: float, tan_phi: np.ndarray, cohesion_force: np.ndarray,
+                   tension_force: np.ndarray, closed_this_step: np.ndarray, friction_normal: np.ndarray,
+                   friction_tolerance: float = 1e-3
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """New (state, friction direction, trial direction, changed, unsettled) for end-of-step gaps, shear, slip.
 
-    The rules of :func:`srdda.contact.openclose.next_states` with the shear a
-    vector in the contact plane: LOCKED while k_s|s| is within the strength,
-    else SLIDING along ŝ = s/|s|; a sliding contact locks when its slip turns
-    back (ŝ·ŝ_prev < 0). A slip direction that turns by more than
-    ``friction_tolerance`` (|Δŝ|), like a normal force that moves by more than
-    it (relative), leaves the friction ``unsettled``.
+    ``shear`` is the shear spring's stretch s, ``slip`` the step's tangential
+    relative displacement s − s_0. The rules of
+    :func:`srdda.contact.openclose.next_states` with the shear a vector:
+
+    * an OPEN or LOCKED contact that is closed is LOCKED while k_s|s| is
+      within the strength, else SLIDING along s/|s| (the direction of the
+      load its spring carried); one that closes is LOCKED first;
+    * a SLIDING contact locks when its slip turns back against its direction
+      (by more than ``friction_tolerance`` × the elastic shear limit
+      strength/k_s, which rounding of a contact at rest never reaches);
+    * the glancing rule: a contact that closed in this step and then pulls
+      in tension while LOCKED slides instead.
+
+    The friction direction (n, 2) of a contact that keeps sliding is held
+    for the whole step; the *trial direction* is the one the next step
+    starts from: that of the trial force of a spring held at its strength,
+    ŝ·strength/k_s + slip (an elastic predictor and plastic corrector, Simo
+    & Hughes 1998, ch. 2), so the slip turns it and rounding of a slip near
+    zero does not. (Turning it within the step couples every contact's
+    direction to its normal force through the strength; the iteration then
+    oscillated on a block at rest on an incline.) A contact that starts to
+    slide takes its trial direction at once. ``unsettled``: sliding
+    contacts whose normal force moved by more than ``friction_tolerance``
+    (relative) since the solve that used it.
     """
     normal = -kn * gap
     closed = normal >= -tension_force
     strength = np.maximum(normal, 0.0) * tan_phi + cohesion_force
     size = np.linalg.norm(shear, axis=1)
-    slip = np.where(size[:, None] > 0, shear / np.where(size > 0, size, 1.0)[:, None], 0.0)
     holds = ks * size <= strength
-    along = np.einsum("nk,nk->n", slip, direction)
-    reversed_slip = (state == SLIDING) & (along < 0) & (strength > 0)
-    just_closed = state == OPEN
+    sliding = state == SLIDING
+    limit = strength / ks
+    trial = np.where(sliding[:, None], direction * limit[:, None] + slip, shear)
+    trial_size = np.linalg.norm(trial, axis=1)
+    unit = np.where(trial_size[:, None] > 0, trial / np.where(trial_size > 0, trial_size, 1.0)[:, None], 0.0)
+    unloads = sliding & (np.einsum("nk,nk->n", slip, direction) < -friction_tolerance * limit) & (strength > 0)
+    stays = np.where(sliding, ~unloads, ~holds & (state != OPEN))
     glancing = (state == LOCKED) & ~closed & closed_this_step
-    new_state = np.where(closed, np.where(holds | reversed_slip | just_closed, LOCKED, SLIDING), OPEN)
+    new_state = np.where(closed, np.where(stays, SLIDING, LOCKED), OPEN)
     new_state = np.where(glancing, SLIDING, new_state).astype(np.int8)
-    new_direction = np.where((new_state == SLIDING)[:, None], slip, 0.0)
-    friction = tan_phi > 0
-    turned = (new_state == SLIDING) & (state == SLIDING) & friction & (along <= 0)
-    changed = (new_state != state) | turned
+    now_sliding = new_state == SLIDING
+    trial_direction = np.where(now_sliding[:, None], unit, 0.0)
+    new_direction = np.where((now_sliding & sliding)[:, None], direction, trial_direction)
+    changed = new_state != state
     force = np.maximum(normal, 0.0)
-    unsettled = (new_state == SLIDING) & (state == SLIDING) & friction & (
-        (np.abs(force - friction_normal) > friction_tolerance * force)
-        | (np.linalg.norm(new_direction - direction, axis=1) > friction_tolerance))
-    return new_state, new_direction, changed, unsettled
+    unsettled = now_sliding & sliding & (tan_phi > 0) & (np.abs(force - friction_normal) > friction_tolerance * force)
+    return new_state, new_direction, trial_direction, changed, unsettled
 
 
 @dataclass(frozen=True)
@@ -327,9 +347,10 @@ class SolidContactStep:
         self.iterations = 0
         self.closed_this_step = np.zeros(len(state), dtype=bool)
         self.flips = np.zeros(len(state), dtype=np.int64)
+        self.frictionless = np.zeros(len(state), dtype=bool)  # held sliding after their slip turned back
+        self.trial_direction = direction.copy()  # the friction direction the next step starts from
         self.friction_normal = normal_force.copy()
         self.applied = np.zeros((len(state), _FRAME))  # friction force of the last solve in the frame (N)
-        self._secant: tuple[np.ndarray, np.ndarray] | None = None
         self._shapes: tuple[np.ndarray, ...] | None = None
 
     def __len__(self) -> int:
@@ -375,8 +396,8 @@ class SolidContactStep:
         self.shear = self.shear0 + np.einsum("nki,ni->nk", g.frame, rel_s)
         p = self.params
         self.closed_this_step |= (self.state == OPEN) & (self.gap < 0)
-        state, direction, changed, unsettled = next_states_3d(
-            self.state, self.direction, self.gap, self.shear, p.normal_stiffness, p.shear_stiffness, self.tan_phi,
+        state, direction, trial_direction, changed, unsettled = next_states_3d(
+            self.state, self.direction, self.gap, self.shear, self.shear - self.shear0, p.normal_stiffness, p.shear_stiffness, self.tan_phi,
             self.cohesion_force, self.tension_force, self.closed_this_step, self.friction_normal,
             p.friction_tolerance)
         # as in 2D (srdda.contact.term): a contact that changed state ``freeze_after`` times keeps it,
@@ -387,36 +408,29 @@ class SolidContactStep:
                 | ((self.state != OPEN) & (state == OPEN) & (self.gap > band)))
         limit = 0 if self.iterations >= p.settle_after else p.freeze_after
         frozen = (self.flips >= limit) & (state != self.state) & ~safe
-        # a contact held SLIDING whose slip turned back would have its friction push the block the way
-        # it moves (creating energy): it keeps sliding without friction
-        turned_back = frozen & (self.state == SLIDING) & (np.einsum("nk,nk->n", self.shear, self.direction) < 0)
+        # a contact held SLIDING whose slip turned back had its friction push the block the way it
+        # moves (creating energy): it slides without friction for the rest of the step (a force inside
+        # the friction cone), and the step is solved again so that the accepted solve has no such force
+        turned_back = frozen & (self.state == SLIDING) & (np.einsum("nk,nk->n", self.shear - self.shear0,
+                                                                    self.direction) < 0)
         state = np.where(frozen, self.state, state).astype(np.int8)
         direction = np.where((frozen & ~turned_back)[:, None], self.direction, direction)
-        direction = np.where(turned_back[:, None], 0.0, direction)
-        changed = np.where(frozen, False, changed)
+        changed = np.where(frozen, False, changed) | (turned_back & ~self.frictionless)
+        self.frictionless |= turned_back
+        direction = np.where(self.frictionless[:, None], 0.0, direction)
         if self.iterations < p.settle_after:
             changed = changed | unsettled
         self.flips += state != self.state
+        self.trial_direction = np.where(self.frictionless[:, None], 0.0, trial_direction)
         self.normal_force = np.maximum(-p.normal_stiffness * self.gap, 0.0)
-        self.friction_normal = self._next_friction_normal(state)
+        # Shi's substitution: the next solve's friction uses this solve's N. (The 2D term's per-contact
+        # secant step diverges here: the contacts of one face share the block's tilt, so each contact's
+        # N depends on the others' friction more than on its own; substitution contracts by the
+        # coupling, measured 0.06 on the sliding incline.)
+        self.friction_normal = self.normal_force.copy()
         self.state, self.direction = state, direction
         self.iterations += 1
         return not bool(np.any(changed))
-
-    def _next_friction_normal(self, new_state: np.ndarray) -> np.ndarray:
-        """N for the next solve's friction: the per-contact secant step of the 2D term on N_used -> N_solved."""
-        used, solved = self.friction_normal, self.normal_force
-        residual = solved - used
-        nxt = solved.copy()
-        sliding = (self.state == SLIDING) & (new_state == SLIDING)
-        if self._secant is not None:
-            prev_used, prev_residual = self._secant
-            slope = residual - prev_residual
-            ok = sliding & (np.abs(slope) > 1e-12 * np.maximum(np.abs(residual), 1e-300)) & (used != prev_used)
-            step = np.where(ok, residual * (used - prev_used) / np.where(ok, slope, 1.0), 0.0)
-            nxt = np.where(ok, np.maximum(used - step, 0.0), nxt)
-        self._secant = (used.copy(), residual)
-        return nxt
 
     def friction_work(self) -> float:
         """Work (J) the friction forces of the last solve did over the step's slip; ≤ 0 when they oppose it."""
@@ -431,7 +445,8 @@ class SolidContactStep:
             + 0.5 * p.shear_stiffness * float(np.sum(self.shear[locked] ** 2))
         f = self.found
         return SolidContactSet(f[:, 0].copy(), f[:, 1].copy(), f[:, 2].copy(), f[:, 3].copy(), f[:, 4].copy(),
-                               self.state.copy(), self.direction.copy(), self.reference.copy(), self.bonded & locked,
+                               self.state.copy(), self.trial_direction.copy(), self.reference.copy(),
+                               self.bonded & locked,
                                self.normal_force.copy(), self.gap.copy(), np.where(locked[:, None], self.shear, 0.0),
                                self.geometry.point_a.copy(), self.geometry.normal.copy(), energy)
 
