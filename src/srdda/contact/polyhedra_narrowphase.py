@@ -34,7 +34,10 @@ Criteria (d0 the contact distance, all on the configuration at t):
   a V-F *band* contact (v projects outside the polygon by less than d0) is
   the entrance face of v, kept only when v has no interior contact with b;
 * E-E: both edges convex, not parallel (sin of their angle above the angle
-  tolerance), the closest points inside both segments; the normal n, turned
+  tolerance), the closest points inside both segments and farther than d0
+  from their ends (nearer, the end vertex's V-F band contact carries the
+  contact: an edge whose end juts out past a rim by rounding or by elastic
+  strain would otherwise be supported twice at one point); the normal n, turned
   outward from b, lies in b's normal cone at its edge (between the normals
   of its two faces, to within the angle tolerance) and -n in a's;
 * plausibility of a penetrating V-F contact: no other face of b that v's
@@ -57,7 +60,6 @@ VERTEX_FACE = 0
 EDGE_EDGE = 1
 FOUND_FIELDS = 5  # [kind, feature a, feature b, block a, block b]
 _INSIDE = 1e-9  # a projection this close to a face's boundary (× d0) counts as inside
-_PARAMETER = 1e-9  # E-E closest points within this of an edge's end (relative) belong to its end vertex
 
 
 @njit(cache=True)
@@ -234,7 +236,9 @@ def _edge_edge(X, a, b, block_edge_ptr, edge_v0, edge_v1, edge_faces, edge_conve
             wr = wx * rx + wy * ry + wz * rz
             s = (uw * wr - ww * ur) / cc
             t = (uu * wr - uw * ur) / cc
-            if not (_PARAMETER < s < 1.0 - _PARAMETER and _PARAMETER < t < 1.0 - _PARAMETER):
+            # closest points within d0 of an edge's end belong to that end vertex (its V-F band contact)
+            lu, lw = np.sqrt(uu), np.sqrt(ww)
+            if not (d0 < s * lu < lu - d0 and d0 < t * lw < lw - d0):
                 continue
             norm = np.sqrt(cc)
             mx, my, mz = cx / norm, cy / norm, cz / norm

@@ -267,8 +267,8 @@ def next_states_3d(state: np.ndarray, direction: np.ndarray, gap: np.ndarray, sh
     trial = np.where(sliding[:, None], direction * limit[:, None] + slip, shear)
     trial_size = np.linalg.norm(trial, axis=1)
     unit = np.where(trial_size[:, None] > 0, trial / np.where(trial_size > 0, trial_size, 1.0)[:, None], 0.0)
-    unloads = sliding & (np.einsum("nk,nk->n", slip, direction) < -friction_tolerance * limit) & (strength > 0)
-    stays = np.where(sliding, ~unloads, ~holds & (state != OPEN))
+    reversed_slip = sliding & (np.einsum("nk,nk->n", slip, direction) < 0) & (strength > 0)
+    stays = ~holds & ~reversed_slip & (state != OPEN)
     glancing = (state == LOCKED) & ~closed & closed_this_step
     new_state = np.where(closed, np.where(stays, SLIDING, LOCKED), OPEN)
     new_state = np.where(glancing, SLIDING, new_state).astype(np.int8)
@@ -420,14 +420,24 @@ class SolidContactStep:
         direction = np.where(self.frictionless[:, None], 0.0, direction)
         if self.iterations < p.settle_after:
             changed = changed | unsettled
-        self.flips += state != self.state
+        flipped = state != self.state
+        self.flips += flipped
         self.trial_direction = np.where(self.frictionless[:, None], 0.0, trial_direction)
         self.normal_force = np.maximum(-p.normal_stiffness * self.gap, 0.0)
         # Shi's substitution: the next solve's friction uses this solve's N. (The 2D term's per-contact
         # secant step diverges here: the contacts of one face share the block's tilt, so each contact's
         # N depends on the others' friction more than on its own; substitution contracts by the
-        # coupling, measured 0.06 on the sliding incline.)
-        self.friction_normal = self.normal_force.copy()
+        # coupling, measured 0.06 on the sliding incline.) N is taken only from a solve in which no
+        # contact of the same blocks changed state: a transitional solve (locked springs stopping a
+        # sliding box dead in one step) gives normal forces a hundred times the weight, whose
+        # friction tipped the box over (docs/contacts-3d.md).
+        a, b = self.geometry.block_a, self.geometry.block_b
+        touched = np.zeros(len(ctx.arrays.block_fixed), dtype=bool)
+        touched[a[flipped]] = True
+        touched[b[flipped]] = True
+        touched[ctx.arrays.block_fixed] = False
+        stable = ~(touched[a] | touched[b])
+        self.friction_normal = np.where(stable, self.normal_force, self.friction_normal)
         self.state, self.direction = state, direction
         self.iterations += 1
         return not bool(np.any(changed))

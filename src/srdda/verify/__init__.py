@@ -1,9 +1,9 @@
 """``srdda verify``: the verification cases, each against an independent reference (docs/verification.md).
 
 A case is one function registered with :func:`case`; importing this package
-registers every case (:mod:`.cases2d`, :mod:`.cases3d`).
+registers every case (:mod:`.cases2d`, :mod:`.cases3d`, :mod:`.contacts3d`).
 """
 from .registry import CASES, Case, Row, UnknownCaseError, case, get_case, row, run_case
-from . import cases2d, cases3d  # noqa: F401  (registers the 2D and 3D cases)
+from . import cases2d, cases3d, contacts3d  # noqa: F401  (registers the 2D and 3D cases)
 
 __all__ = ["CASES", "Case", "Row", "UnknownCaseError", "case", "get_case", "row", "run_case"]
