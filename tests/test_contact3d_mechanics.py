@@ -23,7 +23,9 @@ def test_box_slides_down_an_oblique_incline_with_the_closed_form_acceleration():
     # Measured 3e-12 relative after 0.5 s of settling; 1e-6 leaves room for the shorter settling here.
     measured = incline_case(30.0, 20.0, "srdda", settle=0.2, duration=0.2)
     assert measured.acceleration == pytest.approx(incline_acceleration(30.0, 20.0), rel=1e-6)
-    assert measured.cross_slope < 1e-9  # symmetric about the dip: no sideways drift (measured 1e-14 m)
+    # nothing pushes it across the dip; the friction direction, carried from step to step, drifts by
+    # rounding only (measured 1.7e-9 m sideways over 0.11 m of travel)
+    assert measured.cross_slope < 1e-6 * measured.travel
 
 
 def test_box_on_an_incline_steeper_than_nothing_but_flatter_than_its_friction_stays():
@@ -74,9 +76,11 @@ def _hanging_block(tension: float, cohesion: float) -> srdda.Result:
 
 
 def test_tensile_strength_over_the_joint_area_holds_a_hanging_block_and_less_lets_it_fall():
-    # tension strength × area against the weight 24.5 kN: 50 kPa holds it, 10 kPa does not
-    held = _hanging_block(50e3, 0.0)
-    fell = _hanging_block(10e3, 0.0)
+    # tension strength × area against the weight 24.5 kN: 50 kPa holds it, 10 kPa does not. The joint has
+    # cohesion too: without it a contact in tension has no shear strength, so the rounding of its shear
+    # (1e-17 m) makes it slide, and a sliding contact loses its bond (as in 2D)
+    held = _hanging_block(50e3, 50e3)
+    fell = _hanging_block(10e3, 50e3)
     drop_held = 0.0 - held.array("centroid")[-1, 1, 2] - 0.5
     drop_fell = 0.0 - fell.array("centroid")[-1, 1, 2] - 0.5
     assert drop_held < 1e-5  # elastic stretch of the springs only (m g / (4 k_n) ~ 6e-7 m)
@@ -98,8 +102,8 @@ def test_open_close_rules_with_a_shear_vector():
     assert new.tolist() == [LOCKED, LOCKED, SLIDING, SLIDING, LOCKED, OPEN]
     np.testing.assert_allclose(friction[2], [0, 1])  # starts to slide along its spring's load
     np.testing.assert_allclose(friction[3], [1, 0])  # keeps its direction for the step
-    # the next step's direction: the trial force of a spring held at its strength (0.5 µm) plus the slip
-    np.testing.assert_allclose(trial[3], np.array([2.5e-6, 1e-6]) / np.hypot(2.5e-6, 1e-6))
+    # the next step's direction: the trial force of a spring held at its strength (1.25 µm along ŝ) plus the slip
+    np.testing.assert_allclose(trial[3], np.array([3.25e-6, 1e-6]) / np.hypot(3.25e-6, 1e-6))
     assert changed.tolist() == [True, False, True, False, True, True]  # the reversed slip locks
 
 
@@ -123,8 +127,9 @@ def test_resume_with_3d_contacts_equals_the_uninterrupted_run(tmp_path: Path):
     settings = srdda.RunSettings(dt=1e-3, n_steps=200, method="srdda", penalty=1e11)
     reference = srdda.run(model(), settings)
     assert reference.completed and np.max(reference.closed_contacts) > 0
+    stop = next(k for k in range(100, 190) if reference.closed_contacts[k] > 0)  # stopped while touching
     path = tmp_path / "drop.h5"
-    first = srdda.run(model(), dataclasses.replace(settings, n_steps=150),
+    first = srdda.run(model(), dataclasses.replace(settings, n_steps=stop),
                       recorders=[ResultsStore(path, settings, flush_every=10)])
     assert isinstance(first.final_state.contacts, SolidContactSet)
     got = resume(path, model().arrays()).final_state
