@@ -42,7 +42,7 @@ def convex_polyhedron(draw):
     return points, hull.simplices
 
 
-@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(block=convex_polyhedron(), height=st.floats(0.02, 0.3),
        v=st.tuples(st.floats(-2, 2), st.floats(-2, 2), st.floats(-1, 0)),
        omega=st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3)),
