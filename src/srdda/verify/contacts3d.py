@@ -116,6 +116,6 @@ def extruded_incline_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
                 rows.append(row("extruded-incline-3d", f"travel in 1 s (m), φ = {phi:g}°", method, travel_3d,
                                 travel_2d, EXTRUDED))
             else:  # at rest: the difference in m
-                rows.append(row("extruded-incline-3d", f"|travel 3D − travel 2D| in 1 s (m), φ = {phi:g}°", method,
+                rows.append(row("extruded-incline-3d", f"3D − 2D travel in 1 s (m), φ = {phi:g}°", method,
                                 abs(travel_3d - travel_2d), 0.0, EXTRUDED))
     return rows
