@@ -25,7 +25,9 @@ from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume
 from .geometry.cutting import BlockCut, CuttingError, cut_blocks
 from .geometry.jointsets import JointSet, circular_opening, joint_traces, polygonal_opening
-from .cutmodel import add_cut_blocks
+from .cutmodel import add_cut_blocks, add_cut_polyhedra
+from .geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
+from .geometry.jointsets3d import JointPlanes, JointSet3D, joint_planes
 
 __version__ = "0.1.0"
 
@@ -36,4 +38,6 @@ __all__ = [
     "get_solver", "method_preset", "run", "__version__", "ResultsStore", "StoredResult", "read_results", "resume",
     "BlockCut", "CuttingError", "JointSet", "add_cut_blocks", "circular_opening", "cut_blocks", "joint_traces",
     "polygonal_opening",
+    "JointPlanes", "JointSet3D", "PolyhedralCut", "add_cut_polyhedra", "convex_hull_polyhedron", "cut_polyhedra",
+    "joint_planes",
 ]

@@ -1,4 +1,5 @@
-"""Blocks of a :class:`~srdda.geometry.cutting.BlockCut` added to a :class:`~srdda.model.Model`."""
+"""Cut blocks added to a :class:`~srdda.model.Model`: 2D (:class:`~srdda.geometry.cutting.BlockCut`) and 3D
+(:class:`~srdda.geometry.cutting3d.PolyhedralCut`)."""
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
@@ -6,9 +7,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from .geometry.cutting import NO_JOINT, BlockCut
+from .geometry.cutting3d import PolyhedralCut
 from .model import Model, ModelError
 
-__all__ = ["add_cut_blocks"]
+__all__ = ["add_cut_blocks", "add_cut_polyhedra"]
 
 
 def add_cut_blocks(model: Model, cut: BlockCut, materials: Mapping[int, str],
@@ -36,3 +38,25 @@ def add_cut_blocks(model: Model, cut: BlockCut, materials: Mapping[int, str],
                                    fixed=bool(fixed_arr[b]),
                                    edge_joints=edge_joints if any(j is not None for j in edge_joints) else None))
     return out
+
+
+def add_cut_polyhedra(model: Model, cut: PolyhedralCut, materials: str | Mapping[int, str],
+                      fixed: Sequence[bool] | np.ndarray | None = None, prefix: str = "block") -> list[int]:
+    """Add every block of a 3D cut to ``model``; returns their indices.
+
+    ``materials``: one material name for all blocks, or a map from the
+    domain part index (``cut.block_part``) to a material name. ``fixed``
+    marks blocks that never move. The faces' joint types
+    (``cut.face_joint``) stay with the cut: joint materials between 3D blocks
+    are chosen by block materials (``joint_materials.between``).
+    """
+    by_part = {int(p): materials for p in np.unique(cut.block_part)} if isinstance(materials, str) \
+        else dict(materials)
+    missing = sorted(set(np.unique(cut.block_part).tolist()) - set(by_part))
+    if missing:
+        raise ModelError(f"cut blocks come from domain part(s) {missing} with no entry in materials")
+    fixed_arr = np.zeros(cut.n_blocks, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
+    if fixed_arr.shape != (cut.n_blocks,):
+        raise ModelError(f"fixed needs one flag per block ({cut.n_blocks}), got {fixed_arr.shape}")
+    return model.add_polyhedra(cut.blocks(), [by_part[int(p)] for p in cut.block_part],
+                               [f"{prefix} {b}" for b in range(cut.n_blocks)], fixed_arr.tolist())

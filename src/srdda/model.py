@@ -17,8 +17,8 @@ import shapely
 from .constraints.data import ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
 from .history import HistoryError, MotionHistory, TimeHistory
 from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon, overlapping_pairs
-from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_polyhedron, polyhedron_covers,
-                                  polyhedron_moments, prism)
+from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_polyhedra, normalize_polyhedron,
+                                  polyhedron_covers, polyhedron_moments, prism)
 from .kinematics.blocktype import PLANE, SOLID, BlockType, block_type_of_dimension
 from .kinematics.shape3d import elasticity_matrix_3d
 
@@ -290,6 +290,28 @@ class Model:
         mat_index = list(self.materials).index(material)
         self.blocks.append(_Block(verts, mat_index, (*v, *w), s, label, bool(fixed), None, outward))
         return index
+
+    def add_polyhedra(self, blocks: Sequence[tuple[object, object]], materials: Sequence[str],
+                      names: Sequence[str], fixed: Sequence[bool]) -> list[int]:
+        """Add many polyhedral blocks at rest, validated together (fast for thousands); returns their indices.
+
+        ``blocks`` are (vertices, faces) pairs, with one material, name and
+        fixed flag each; otherwise as :meth:`add_polyhedron`.
+        """
+        if not len(blocks) == len(materials) == len(names) == len(fixed):
+            raise ModelError("add_polyhedra: give one material, name and fixed flag per block")
+        unknown = sorted(set(materials) - set(self.materials))
+        if unknown:
+            raise ModelError(f"{names[list(materials).index(unknown[0])]}: unknown material {unknown[0]!r}")
+        if blocks:
+            self._same_dimension(SOLID.dim, names[0])
+        mat_index = {name: k for k, name in enumerate(self.materials)}
+        first = len(self.blocks)
+        rest = (0.0,) * (2 * SOLID.dim)
+        for (verts, outward), mat, name, fix in zip(normalize_polyhedra(blocks, names), materials, names, fixed):
+            self.blocks.append(_Block(verts, mat_index[mat], rest, (0.0,) * SOLID.n_strain, name, bool(fix), None,
+                                      outward))
+        return list(range(first, len(self.blocks)))
 
     @property
     def dim(self) -> int:

@@ -11,3 +11,8 @@ from .polyhedron import (PLANARITY_TOLERANCE, PolyhedronError, PolyhedronMesh, P
 
 __all__ += ["PLANARITY_TOLERANCE", "PolyhedronError", "PolyhedronMesh", "PolyhedronMoments", "box",
             "normalize_polyhedron", "polyhedra_from_meshio", "polyhedron_moments", "prism"]
+from .cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
+from .jointsets3d import JointPlanes, JointSet3D, dip_and_direction, fisher_directions, joint_planes, plane_normal
+
+__all__ += ["JointPlanes", "JointSet3D", "PolyhedralCut", "convex_hull_polyhedron", "cut_polyhedra",
+            "dip_and_direction", "fisher_directions", "joint_planes", "plane_normal"]

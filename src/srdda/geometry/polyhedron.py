@@ -44,6 +44,7 @@ __all__ = [
     "PolyhedronMesh",
     "PolyhedronMoments",
     "box",
+    "normalize_polyhedra",
     "normalize_polyhedron",
     "polyhedra_from_meshio",
     "polyhedron_moments",
@@ -370,6 +371,11 @@ def normalize_polyhedron(vertices: object, faces: object, label: str = "polyhedr
     not checked.
     """
     return _normalize_blocks([(vertices, faces)], [label])[0]
+
+
+def normalize_polyhedra(blocks: Sequence[tuple[object, object]], labels: Sequence[str]) -> list[Block3D]:
+    """:func:`normalize_polyhedron` of many blocks at once (whole-array checks); the first failure is raised."""
+    return _normalize_blocks(blocks, labels)
 
 
 @dataclass(frozen=True)

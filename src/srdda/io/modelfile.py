@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -16,15 +17,19 @@ import numpy as np
 import tomli_w
 from pydantic import ValidationError
 
+from ..cutmodel import add_cut_polyhedra
 from ..history import HistoryError, MotionHistory
+from ..geometry.cutting import CuttingError
+from ..geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
+from ..geometry.jointsets3d import JointPlanes, JointSet3D, joint_planes, plane_normal
 from ..geometry.polygon import PolygonError
 from ..geometry.polyhedron import PolyhedronError, box
 from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..settings import RunSettings
-from .schema import BlockSection, HistorySection, ModelFile
+from .schema import BlockSection, CuttingSection, HistorySection, ModelFile
 
 __all__ = ["ModelFileError", "load_model", "read_model_text", "model_from_dict", "save_model", "model_to_dict",
-           "format_validation"]
+           "format_validation", "cut_section"]
 
 
 class ModelFileError(ValueError):
@@ -101,7 +106,15 @@ def _build(spec: ModelFile, source: str) -> tuple[Model, RunSettings]:
             if b.name in names:
                 raise ModelFileError(f"{source}: blocks[{i}].name: duplicate block name {b.name!r}")
             names[b.name] = i
-    n = len(spec.blocks)
+    if spec.cutting is not None:
+        try:
+            _add_cutting(model, spec.cutting)
+        except (ModelError, CuttingError, PolyhedronError) as exc:
+            raise ModelFileError(f"{source}: cutting: {exc}") from None
+        names.update({b.name: i for i, b in enumerate(model.blocks) if i >= len(spec.blocks)})
+    if not model.blocks:
+        raise ModelFileError(f"{source}: the model has no blocks; give [[blocks]] or a [cutting] section")
+    n = len(model.blocks)
 
     def where(section: str, i: int) -> str:
         return f"{source}: {section}[{i}]"
@@ -146,6 +159,44 @@ def _add_block(model: Model, b: BlockSection, label: str) -> None:
     omega = b.angular_velocity if isinstance(b.angular_velocity, tuple) else (0.0, 0.0, b.angular_velocity)
     stress = b.stress if len(b.stress) == 6 else (b.stress[0], b.stress[1], 0.0, 0.0, 0.0, b.stress[2])
     model.add_polyhedron(vertices, faces, b.material, b.velocity or (0.0, 0.0, 0.0), omega, stress, label, b.fixed)
+
+
+def cut_section(c: CuttingSection) -> PolyhedralCut:
+    """The 3D cut a ``[cutting]`` section describes: its convex domain parts cut by its joint sets and joints."""
+    parts = []
+    for k, d in enumerate(c.domain):
+        where = f"domain[{k}]"
+        if (d.box is None) == (d.vertices is None) or (d.faces is not None and d.vertices is None):
+            raise ModelError(f"{where}: give 'box', or 'vertices' (with 'faces', or without: their convex hull)")
+        if d.box is not None:
+            parts.append(box(*d.box, where))
+        else:
+            parts.append((d.vertices, d.faces) if d.faces is not None else convex_hull_polyhedron(d.vertices, where))
+    sets = [JointSet3D(s.dip, s.dip_direction, s.spacing, s.kappa, s.persistence, s.radius, s.joint_type, s.origin,
+                       s.spacing_sd) for s in c.joint_sets]
+    points = np.concatenate([np.asarray(v, dtype=float) for v, _ in parts])
+    single = JointPlanes.of([plane_normal(j.dip, j.dip_direction) for j in c.joints], [j.point for j in c.joints],
+                            [np.inf if j.radius is None else j.radius for j in c.joints],
+                            np.array([j.joint_type for j in c.joints], dtype=np.int64))
+    joints = JointPlanes.concatenate([joint_planes(points, sets, c.seed), single])
+    return cut_polyhedra(parts, joints, min_volume=c.min_volume, min_thickness=c.min_thickness)
+
+
+def _add_cutting(model: Model, c: CuttingSection) -> None:
+    """3D blocks cut as the section says (docs/cutting-3d.md), fixed by part or by ``fixed_box``."""
+    for k, d in enumerate(c.domain):
+        if d.material not in model.materials:
+            raise ModelError(f"domain[{k}].material: unknown material {d.material!r}")
+    cut = cut_section(c)
+    fixed = np.array([c.domain[p].fixed for p in cut.block_part], dtype=bool)
+    if c.fixed_box is not None:
+        centroid = cut.centroids()
+        fixed |= np.all((centroid >= c.fixed_box[0]) & (centroid <= c.fixed_box[1]), axis=1)
+    if cut.skipped or cut.rejected:
+        reasons = sorted({s.reason for s in cut.skipped})
+        warnings.warn(f"cutting: {len(cut.skipped)} joint cut(s) skipped ({'; '.join(reasons) or 'none'}), "
+                      f"{len(cut.rejected)} fragment(s) rejected; srdda.cut_polyhedra lists them", stacklevel=2)
+    add_cut_polyhedra(model, cut, {k: d.material for k, d in enumerate(c.domain)}, fixed, prefix="cut")
 
 
 def _history(h: HistorySection, where: str) -> MotionHistory:

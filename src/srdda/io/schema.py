@@ -15,7 +15,8 @@ from ..units import to_si
 
 __all__ = ["ModelFile", "MaterialSection", "BlockSection", "PointRef", "FixedPointSection",
            "PointLoadSection", "PointSpringSection", "MeasuredPointSection", "JointMaterialSection",
-           "HingeSection", "PinSection", "SpringSection", "HistorySection", "PrescribedMotionSection"]
+           "HingeSection", "PinSection", "SpringSection", "HistorySection", "PrescribedMotionSection",
+           "CuttingSection", "CutDomainSection", "JointSetSection", "JointSection"]
 
 
 def _unit(kind: str) -> BeforeValidator:
@@ -27,6 +28,7 @@ Stiffness = Annotated[float, _unit("stiffness")]
 Density = Annotated[float, _unit("density")]
 Time = Annotated[float, _unit("time")]
 Angle = Annotated[float, _unit("angle")]
+Length = Annotated[float, _unit("length")]
 Point = tuple[float, float] | tuple[float, float, float]  # [x, y] in 2D, [x, y, z] in 3D
 
 
@@ -145,6 +147,55 @@ class PrescribedMotionSection(PointRef):
     stiffness: Stiffness | None = Field(None, gt=0)
 
 
+Point3 = tuple[float, float, float]
+
+
+class CutDomainSection(_Strict):
+    """One convex part of the domain cut into 3D blocks: a ``box``, or ``vertices`` (with ``faces``, or their hull)."""
+
+    material: str
+    box: tuple[Point3, Point3] | None = None
+    vertices: list[Point3] | None = Field(None, min_length=4)
+    faces: list[list[int]] | None = None
+    fixed: bool = False
+
+
+class JointSetSection(_Strict):
+    """A joint set (srdda.geometry.jointsets3d.JointSet3D): dip / dip direction, spacing, scatter, persistence."""
+
+    dip: Angle = Field(ge=0, le=90)
+    dip_direction: Angle
+    spacing: Length = Field(gt=0)
+    kappa: float | None = Field(None, gt=0)
+    persistence: float = Field(1.0, gt=0, le=1)
+    radius: Length | None = Field(None, gt=0)
+    origin: Point3 = (0.0, 0.0, 0.0)
+    spacing_sd: Length = Field(0.0, ge=0)
+    joint_type: int = 1
+
+
+class JointSection(_Strict):
+    """One joint plane through ``point``, or a disc centred there with ``radius``."""
+
+    point: Point3
+    dip: Angle = Field(ge=0, le=90)
+    dip_direction: Angle
+    radius: Length | None = Field(None, gt=0)
+    joint_type: int = 1
+
+
+class CuttingSection(_Strict):
+    """3D blocks cut from a convex domain (or convex parts) by joint sets and joints (srdda.geometry.cutting3d)."""
+
+    domain: list[CutDomainSection] = Field(min_length=1)
+    joint_sets: list[JointSetSection] = []
+    joints: list[JointSection] = []
+    seed: int = 0
+    min_volume: float = Field(0.0, ge=0)  # m³
+    min_thickness: Length = Field(0.0, ge=0)
+    fixed_box: tuple[Point3, Point3] | None = None  # blocks whose centroid lies in this box are fixed
+
+
 class ModelFile(_Strict):
     """The whole model file."""
 
@@ -155,7 +206,8 @@ class ModelFile(_Strict):
     run: RunSettings  # the run settings (srdda.settings), validated where they are defined
     materials: dict[str, MaterialSection] = Field(min_length=1)
     joint_materials: dict[str, JointMaterialSection] = {}
-    blocks: list[BlockSection] = Field(min_length=1)
+    blocks: list[BlockSection] = []  # at least one block here or from [cutting]
+    cutting: CuttingSection | None = None
     fixed_points: list[FixedPointSection] = []
     point_loads: list[PointLoadSection] = []
     point_springs: list[PointSpringSection] = []
