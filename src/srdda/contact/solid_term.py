@@ -333,6 +333,7 @@ class SolidContactStep:
         self.found = found
         self.params = params
         self.state = state
+        self.started = state.copy()  # the states the step started from
         self.direction = direction
         self.reference = reference
         self.bonded = bonded
@@ -443,8 +444,16 @@ class SolidContactStep:
         return not bool(np.any(changed))
 
     def friction_work(self) -> float:
-        """Work (J) the friction forces of the last solve did over the step's slip; ≤ 0 when they oppose it."""
-        return float(np.sum(self.applied * (self.shear - self.shear0)))
+        """Work (J) of friction over the step that is dissipated; ≤ 0 when friction opposes the slip.
+
+        The friction forces of the last solve times the step's slip, less the
+        energy ½k_s|s_0|² of the springs that started the step dragged at their
+        strength (sliding) and end it locked: that part of the friction work
+        was stored in the spring, which the contact energy now counts.
+        """
+        relocked = (self.started == SLIDING) & (self.state == LOCKED)
+        stored = 0.5 * self.params.shear_stiffness * float(np.sum(self.shear0[relocked] ** 2))
+        return float(np.sum(self.applied * (self.shear - self.shear0))) - stored
 
     def commit(self) -> SolidContactSet:
         """The contacts as they ended the accepted step."""
@@ -539,17 +548,26 @@ class SolidContactModel:
         state[kept] = previous.state[src]
         direction = np.zeros((len(found), _FRAME))
         direction[kept] = previous.direction[src]
-        # a new, sliding or open contact starts its shear spring unstretched (as in 2D)
+        # a new or open contact starts its shear spring unstretched (as in 2D); a locked one keeps its
+        # reference; a sliding vertex-face contact starts it stretched to its strength along its slip
+        # direction (an elastic-plastic spring dragged along, Simo & Hughes 1998), so that if it locks
+        # again it carries the friction force it had, not zero (docs/contacts-3d.md)
         reference = geom.parameter.copy()
         keep_reference = kept.copy()
         keep_reference[kept] = previous.state[src] == LOCKED
         reference[keep_reference] = previous.reference[old[keep_reference]]
+        joint = arr.joint_properties[arr.joint_by_materials[arr.block_material[geom.block_a],
+                                                            arr.block_material[geom.block_b]]]
+        dragged = kept.copy()
+        dragged[kept] = previous.state[src] == SLIDING
+        dragged &= ~geom.is_edge
+        cap = np.tan(joint[dragged, JOINT_FRICTION]) * previous.normal_force[old[dragged]] \
+            / self.params.shear_stiffness
+        reference[dragged] -= cap[:, None] * previous.direction[old[dragged]]
         bonded = np.full(len(found), first_step)
         bonded[kept] = previous.bonded[src]
         normal_force = self.params.normal_stiffness * np.maximum(-geom.gap, 0.0)
         normal_force[kept] = previous.normal_force[src]
-        joint = arr.joint_properties[arr.joint_by_materials[arr.block_material[geom.block_a],
-                                                            arr.block_material[geom.block_b]]]
         area = self.bond_area(found, surface, geom.normal)
         return SolidContactStep(geom, found, self.params, state, direction, reference, bonded, normal_force, joint,
                                 area)
