@@ -6,14 +6,18 @@
   (hash grid), the narrow phase (vertex-face and edge-edge) and the whole ``SolidContactModel.detect``
   (with the face planes), best of three after a warm-up;
 * a step: 10 x 10 x 10 unit cubes stacked on a fixed base under gravity (a wall of blocks settling
-  into its contacts), 20 steps of 1 ms per method: ms per step and solves per step.
+  into its contacts), 20 steps of 1 ms per method: ms per step and solves per step;
+* a step of the 1,303-block 3D jointed slope (examples/solid/jointed-slope-3d.toml), 20 steps per method.
 
-Usage: PYTHONPATH=src python benchmarks/bench_contacts3d.py [--blocks 10000 100000] [--stack 10] [--json out.json]
+Usage: PYTHONPATH=src python benchmarks/bench_contacts3d.py [--blocks 10000 100000] [--stack 10] [--slope FILE]
+       [--json out.json]
 """
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -96,10 +100,27 @@ def time_stack(side: int, method: str, steps: int = 20) -> dict:
             "contacts": int(res.closed_contacts[-1])}
 
 
+def time_model_file(path: str, method: str, steps: int = 20) -> dict:
+    """ms per step of a model file (its settings, ``steps`` steps of its Δt) after one compiling step."""
+    from srdda.io.modelfile import load_model
+
+    model, settings = load_model(path)
+    arrays = model.arrays()
+    settings = dataclasses.replace(settings, method=method, n_steps=steps, record_every=steps)
+    srdda.run(arrays, dataclasses.replace(settings, n_steps=1))
+    t0 = time.perf_counter()
+    res = srdda.run(arrays, settings)
+    wall = time.perf_counter() - t0
+    return {"model": f"{arrays.n_blocks}-block jointed slope", "method": method, "blocks": arrays.n_blocks,
+            "ms_per_step": 1e3 * wall / max(res.final_state.step, 1), "status": res.status,
+            "solves_per_step": float(np.mean(res.iterations[1:])), "contacts": int(res.closed_contacts[-1])}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--blocks", type=int, nargs="*", default=[10_000, 100_000])
     ap.add_argument("--stack", type=int, default=10)
+    ap.add_argument("--slope", default=str(Path(__file__).parents[1] / "examples" / "solid" / "jointed-slope-3d.toml"))
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     rows = [time_detection(n) for n in args.blocks]
@@ -107,6 +128,8 @@ def main() -> None:
         print(f"{r['blocks']:7d} cubes: {r['pairs']} pairs, {r['contacts']} contacts; broad {r['broad_ms']:.1f} ms, "
               f"narrow {r['narrow_ms']:.1f} ms, detect {r['ms_per_step']:.1f} ms (model built in {r['build_s']:.1f} s)")
     rows += [time_stack(args.stack, m) for m in srdda.METHODS]
+    if args.slope:
+        rows += [time_model_file(args.slope, m) for m in srdda.METHODS]
     for r in rows[len(args.blocks):]:
         print(f"{r['model']} {r['method']}: {r['solves_per_step']:.1f} solves per step, {r['contacts']} contacts")
     report(rows, args.json)
