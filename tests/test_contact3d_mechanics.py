@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda.cases.contacts3d import incline_acceleration, incline_case
+from srdda.cases.contacts3d import incline_case
+from srdda.cases.slope3d import incline_acceleration
 from srdda.contact.openclose import LOCKED, OPEN, SLIDING
 from srdda.contact.solid_term import SolidContactSet, next_states_3d
 from srdda.geometry.polyhedron import box

@@ -2,7 +2,8 @@
 
 * incline: a 1 × 1 × 0.5 m box on a fixed plane dipping ψ towards an
   azimuth that is not a coordinate axis, joint friction φ. φ < ψ: it slides
-  with a = g (sin ψ − cos ψ tan φ); φ > ψ: it stays.
+  with a = g (sin ψ − cos ψ tan φ) (:func:`srdda.cases.slope3d.incline_acceleration`);
+  φ > ψ: it stays.
 * drop: a 0.5 m cube dropped on a fixed base at an orientation, thrown
   sideways and spinning; the energy ledger's balance (stored energies plus
   friction dissipation) must never rise above its initial value.
@@ -19,10 +20,10 @@ from ..model import JointMaterial, Material, Model
 from ..results import Result
 from ..settings import RunSettings
 from ..simulation import run
+from .slope3d import G
 
-__all__ = ["incline_model", "incline_case", "incline_acceleration", "InclineRun", "drop_model", "drop_case", "G"]
+__all__ = ["incline_model", "incline_case", "InclineRun", "drop_model", "drop_case"]
 
-G = 9.81
 INCLINE_DENSITY, INCLINE_PENALTY = 2500.0, 1e10  # a 1250 kg box on four contacts of k_n = 1e10 N/m
 
 
@@ -74,12 +75,6 @@ def incline_case(psi: float, phi: float, method: str, settle: float = 0.5, durat
                       travel=float(np.max(np.linalg.norm(moved, axis=1))),
                       cross_slope=float(np.max(np.linalg.norm(across, axis=1))),
                       solves_per_step=float(np.mean(res.iterations[1:])))
-
-
-def incline_acceleration(psi: float, phi: float) -> float:
-    """g (sin ψ − cos ψ tan φ), the sliding block's acceleration (ψ, φ in degrees)."""
-    p, f = np.radians(psi), np.radians(phi)
-    return G * (np.sin(p) - np.cos(p) * np.tan(f))
 
 
 def drop_model(rotation: tuple[float, float, float], height: float = 0.2, velocity=(1.0, 0.5, 0.0),

@@ -8,9 +8,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..cases.contacts3d import drop_case, incline_acceleration, incline_case
-from ..cases.slope3d import (SLIDE_TOPPLE_CASES, WEDGE_PLANES, SlideToppleCase, slide_topple_model,
-                             wedge_friction_for, wedge_model, wedge_solution)
+from ..cases.contacts3d import drop_case, incline_case
+from ..cases.slope3d import (SLIDE_TOPPLE_CASES, WEDGE_PLANES, SlideToppleCase, incline_acceleration,
+                             slide_topple_model, wedge_friction_for, wedge_model, wedge_solution)
 from ..settings import RunSettings
 from ..simulation import run
 from .cases2d import INCLINE_PENALTY, incline_model_2d
