@@ -14,7 +14,7 @@ from srdda.cases.slope3d import incline_acceleration
 from srdda.contact.openclose import LOCKED, OPEN, SLIDING
 from srdda.contact.solid_term import SolidContactSet, next_states_3d
 from srdda.geometry.polyhedron import box
-from srdda.io.results_store import ResultsStore, resume
+from srdda.io.results_store import ResultsStore, read_results, resume
 
 G = 9.81
 
@@ -139,3 +139,7 @@ def test_resume_with_3d_contacts_equals_the_uninterrupted_run(tmp_path: Path):
     for name in ("vertices", "velocity", "rotation"):
         a, b = getattr(got, name), getattr(ref, name)
         assert np.max(np.abs(a - b)) <= 1e-12 * max(1.0, np.max(np.abs(b))), name
+    # the file's contact records hold every per-contact array of the set, contact points and normals included
+    records = read_results(path)
+    last = records.contacts_at(len(records.contacts["step"]) - 1)
+    assert last["point"].shape[1:] == (3,) and last["normal"].shape[1:] == (3,) and last["shear"].shape[1:] == (2,)
