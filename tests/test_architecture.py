@@ -38,6 +38,12 @@ TWO_DIMENSIONAL = {
     "cases/": "verification problems: models of a given dimension",
     "verify/": "verification problems: models of a given dimension",
 }
+# Modules that are 3D by what they are, each with its reason; 2D has its own counterparts.
+THREE_DIMENSIONAL = {
+    "contact/polyhedra_broadphase.py": "3D bounding boxes in a hash grid (x, y, z cells)",
+    "contact/polyhedra_narrowphase.py": "vertex-face and edge-edge detection between polyhedra (cross products)",
+    "contact/solid_term.py": "3D contact geometry: face normals, a 2-vector shear in the contact plane",
+}
 DIMENSION_NUMBERS = {2, 3, 6, 12}
 SIZING_CALLS = {"zeros", "ones", "empty", "full", "eye", "identity", "reshape", "broadcast_to", "tile", "repeat"}
 
@@ -46,7 +52,8 @@ def _engine_modules() -> list[Path]:
     out = []
     for path in sorted(ROOT.rglob("*.py")):
         rel = path.relative_to(ROOT).as_posix()
-        if rel.startswith(SEAM) or any(rel == k or (k.endswith("/") and rel.startswith(k)) for k in TWO_DIMENSIONAL):
+        if rel.startswith(SEAM) or any(rel == k or (k.endswith("/") and rel.startswith(k))
+                                       for k in (*TWO_DIMENSIONAL, *THREE_DIMENSIONAL)):
             continue
         out.append(path)
     return out

@@ -346,13 +346,6 @@ vertices = [[0, 0], [1, 0], [1, 1], [0, 1]]
 material = "r"
 vertices = [[0.5, 0.5], [1.5, 0.5], [1.5, 1.5], [0.5, 1.5]]
 ''', "blocks overlap at the start"),
-    ('''[[blocks]]
-material = "r"
-box = [[0, 0, 0], [1, 1, 1]]
-[[blocks]]
-material = "r"
-box = [[0, 0, 1], [1, 1, 2]]
-''', "contacts between 3D blocks are not available yet"),
 ])
 def test_a_model_the_run_cannot_take_is_one_message_before_any_output(tmp_path, blocks, problem):
     gravity = "[0.0, 0.0, -9.81]" if "box" in blocks else "[0.0, -9.81]"

@@ -85,8 +85,6 @@ def test_3d_input_errors_are_named():
     with pytest.raises(srdda.ModelError, match="3 finite coordinates"):
         m.add_fixed_point((0.5, 0.5))
     m.add_polyhedron(*box((0, 0, 1), (1, 1, 2)), "rock")
-    with pytest.raises(ValueError, match="contacts between 3D blocks are not available yet"):
-        srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=1))
     assert srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=1, contacts=False)).completed
     flat = srdda.Model(gravity=(0.0, -9.81, 0.0))
     flat.add_material("rock", srdda.Material(2600.0, 1e10, 0.25))

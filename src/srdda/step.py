@@ -23,11 +23,12 @@ import numpy as np
 from .assembly.blocks import GyroscopicTerm, block_terms
 from .assembly.system import BlockSystem
 from .constraints import point_terms
+from .contact.solid_term import SolidContactModel, SolidContactTerm
 from .contact.term import ContactModel, ContactParameters, ContactTerm
 from .integrators.methods import Method
 from .kinematics.blocktype import PLANE
 from .integrators.secant import SecantPass
-from .model import ModelArrays, ModelError
+from .model import ModelArrays
 from .settings import RunSettings
 from .solvers import LinearSolver, SolverError
 from .state import State
@@ -98,15 +99,14 @@ class Stepper:
         bt = arrays.block_type
         if self.method.gyroscopic and bt.rotation.stop - bt.rotation.start > 1:  # rotations about several axes
             self.terms.append(GyroscopicTerm(settings.secant_tolerance))
-        if settings.contacts and arrays.n_blocks > 1 and bt is not PLANE:
-            raise ModelError("contacts between 3D blocks are not available yet: set contacts = false "
-                             "(blocks then interact through points, springs and hinges only)")
         if settings.contacts and arrays.n_blocks > 1:
             w0 = model_half_height(arrays.vertices)
-            model = ContactModel(arrays, contact_parameters(arrays, settings, w0))
+            params = contact_parameters(arrays, settings, w0)
+            model = ContactModel(arrays, params) if bt is PLANE else SolidContactModel(arrays, params)
             if np.any(model.can_touch):
-                self.terms.append(ContactTerm(model, settings.open_close_max_iterations,
-                                              settings.max_displacement_ratio * w0, settings.dt))
+                term = ContactTerm if bt is PLANE else SolidContactTerm
+                self.terms.append(term(model, settings.open_close_max_iterations,
+                                       settings.max_displacement_ratio * w0, settings.dt))
         self.secant = SecantPass(settings.secant_tolerance, settings.secant_max_iterations)
 
     def begin(self, state: State, dt: float) -> tuple[StepContext, list[Term]]:

@@ -29,6 +29,7 @@ import h5py
 import numpy as np
 
 from ..geometry.polygon import BlockMoments
+from ..geometry.polyhedron import PolyhedronMoments
 
 __all__ = ["append_checkpoint", "commit_checkpoint", "checkpoint_count", "increasing_prefix", "truncate_checkpoints",
            "read_checkpoint"]
@@ -159,6 +160,6 @@ def read_checkpoint(group: h5py.Group, index: int, moments: Any) -> Any:
             kwargs[f.name] = _read_value(group, f.name, index)
         # a field the file does not have keeps its default (a file written before the field existed)
     kwargs["moments"] = moments(kwargs["vertices"])
-    if not isinstance(kwargs["moments"], BlockMoments):
-        raise TypeError("moments() must return BlockMoments")
+    if not isinstance(kwargs["moments"], (BlockMoments, PolyhedronMoments)):
+        raise TypeError("moments() must return BlockMoments or PolyhedronMoments")
     return cls(**kwargs)

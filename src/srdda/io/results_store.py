@@ -97,8 +97,11 @@ def contacts_from_state(arrays: ModelArrays, state: State) -> dict[str, np.ndarr
     per-contact array of the set (``state``, ``normal_force``, ``gap``, ...).
     """
     c = getattr(state, "contacts", None)
-    if c is None or not hasattr(c, "vertex"):
+    if c is None or not (hasattr(c, "vertex") or hasattr(c, "point")):
         return None
+    if not hasattr(c, "vertex"):  # a set that carries its own points and normals (3D contacts)
+        return {f.name: getattr(c, f.name) for f in dataclasses.fields(c)
+                if isinstance(getattr(c, f.name), np.ndarray) and len(getattr(c, f.name)) == len(c.point)}
     vertex = np.asarray(c.vertex, dtype=np.int64)
     out: dict[str, np.ndarray] = {"point": state.vertices[vertex]}
     if hasattr(c, "edge"):

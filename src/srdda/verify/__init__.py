@@ -1,9 +1,9 @@
 """``srdda verify``: the verification cases, each against an independent reference (docs/verification.md).
 
 A case is one function registered with :func:`case`; importing this package
-registers every case (:mod:`.cases2d`, :mod:`.cases3d`, :mod:`.cases_quake`).
+registers every case (:mod:`.cases2d`, :mod:`.cases3d`, :mod:`.cases_quake`, :mod:`.contacts3d`).
 """
 from .registry import CASES, Case, Row, UnknownCaseError, case, get_case, row, run_case
-from . import cases2d, cases3d, cases_quake  # noqa: F401  (registers the 2D, 3D, earthquake and bolt cases)
+from . import cases2d, cases3d, cases_quake, contacts3d  # noqa: F401  (registers the 2D, 3D, earthquake, bolt, 3D contact cases)
 
 __all__ = ["CASES", "Case", "Row", "UnknownCaseError", "case", "get_case", "row", "run_case"]

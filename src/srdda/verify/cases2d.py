@@ -128,15 +128,24 @@ def _rotate(points: list[list[float]], angle: float) -> np.ndarray:
     return np.asarray(points, dtype=float) @ np.array([[c, -s], [s, c]]).T
 
 
-def _incline_travel(phi: float, method: str) -> tuple[float, float]:
-    """Distance (m) the block's centroid travels in 1 s on the incline with friction angle ``phi`` (°)."""
+INCLINE_PENALTY = 1e10  # N/m per m of thickness
+
+
+def incline_model_2d(phi: float, young: float = 1e9) -> Model:
+    """The block on the 30° incline with joint friction ``phi`` (°)."""
     m = Model(gravity=(0.0, -INCLINE_G))
-    m.add_material("rock", Material(density=2500.0, young=1e9, poisson=0.25))
+    m.add_material("rock", Material(density=2500.0, young=young, poisson=0.25))
     m.add_joint_material("joint", JointMaterial(friction_angle=phi), between=[("rock", "rock")])
     m.add_block(_rotate([[-6, -1], [6, -1], [6, 0], [-6, 0]], INCLINE_PSI), "rock", fixed=True)
     m.add_block(_rotate([[0, 0], [1, 0], [1, 0.5], [0, 0.5]], INCLINE_PSI), "rock")
-    res = _completed(run(m, RunSettings(dt=1e-3, n_steps=1000, method=method, penalty=1e10), keep_history=False),
-                     f"incline-2d φ={phi} {method}")
+    return m
+
+
+def _incline_travel(phi: float, method: str) -> tuple[float, float]:
+    """Distance (m) the block's centroid travels in 1 s on the incline with friction angle ``phi`` (°)."""
+    m = incline_model_2d(phi)
+    res = _completed(run(m, RunSettings(dt=1e-3, n_steps=1000, method=method, penalty=INCLINE_PENALTY),
+                         keep_history=False), f"incline-2d φ={phi} {method}")
     c = res.array("centroid")[:, 1]
     return float(np.linalg.norm(c[-1] - c[0])), float(res.time[-1])
 
