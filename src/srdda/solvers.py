@@ -32,10 +32,17 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .assembly.system import BlockSystem
+from .solvers_iterative import BlockJacobi, IterativeSolverError, PCGResult, SmoothedAggregation, pcg
 
-__all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "DENSE_LIMIT", "SOLVERS"]
+__all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "DENSE_LIMIT", "ITERATIVE_LIMIT",
+           "DEFAULT_TOLERANCE", "SOLVERS"]
 
-DENSE_LIMIT = 120
+DENSE_LIMIT = 120  # unknowns: LAPACK on the dense matrix up to here (20 blocks in 2D)
+ITERATIVE_LIMIT = 2000  # blocks: ``auto`` uses a direct factorisation up to here, the AMG conjugate gradient above
+# The iterative backends stop when every unknown of the increment is estimated within this of the exact
+# solution (m; rad and 1 for rotations and strains, i.e. m per m of block size): 1e-9 m keeps 200 steps
+# of the 1,000-block slope within the issue's 1e-6 m of the direct run even if the errors all added up.
+DEFAULT_TOLERANCE = 1e-9
 
 
 class SolverError(RuntimeError):
@@ -135,47 +142,292 @@ class SuperLUSolver(_Factorizing):
             raise SolverError(f"singular system: {exc}") from exc
 
 
-class CholmodSolver(_Factorizing):
+class _BlockPattern:
+    """The block pattern that a symbolic analysis was made for, and the matrices of that pattern.
+
+    Contacts that open drop their coupling blocks from the assembled matrix,
+    contacts that close add them back: the pattern of the step's matrix
+    changes within the open-close iteration and from step to step while the
+    blocks stay where they are. A matrix whose block pattern lies inside the
+    analysed one is written into it with explicit zeros, so the ordering and
+    symbolic factorisation are reused; a matrix with a new coupling is
+    analysed on the union of both patterns. When the union holds more than
+    ``GROWTH`` times the blocks of the current matrix, the analysis starts
+    from the current pattern again (stale couplings cost fill-in).
+    """
+
+    GROWTH = 1.25
+
+    def __init__(self, keys: np.ndarray, n_blocks: int, ndof: int, upper: bool) -> None:
+        self.keys = keys  # sorted block keys row·n_blocks + column
+        self.n_blocks, self.ndof = n_blocks, ndof
+        rows, cols = np.divmod(keys, n_blocks)
+        a, c = np.meshgrid(np.arange(ndof), np.arange(ndof), indexing="ij")
+        r = (rows[:, None, None] * ndof + a).ravel()
+        q = (cols[:, None, None] * ndof + c).ravel()
+        keep = np.flatnonzero(q >= r) if upper else np.arange(len(r))
+        order = np.lexsort((q[keep], r[keep]))
+        self.take = keep[order]  # entry k of the CSR data is entry take[k] of the flattened block data
+        self.indices = q[self.take].astype(np.int32)
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(r[self.take], minlength=n_blocks * ndof))])
+        self.indptr = self.indptr.astype(np.int32)
+
+    @staticmethod
+    def keys_of(matrix: sp.bsr_matrix) -> np.ndarray:
+        n_blocks = matrix.shape[0] // matrix.blocksize[0]
+        rows = np.repeat(np.arange(n_blocks), np.diff(matrix.indptr))
+        return rows * n_blocks + matrix.indices
+
+    def positions(self, keys: np.ndarray) -> np.ndarray | None:
+        """Where the blocks ``keys`` sit in this pattern, or None if some are not in it."""
+        pos = np.searchsorted(self.keys, keys)
+        inside = pos < len(self.keys)
+        if not np.all(inside) or not np.array_equal(self.keys[pos], keys):
+            return None
+        return pos
+
+    def csr(self, matrix: sp.bsr_matrix, positions: np.ndarray) -> sp.csr_matrix:
+        """``matrix`` (BSR) with this pattern's structure (upper triangle only if the pattern is)."""
+        data = np.zeros((len(self.keys), self.ndof, self.ndof))
+        data[positions] = matrix.data
+        n = self.n_blocks * self.ndof
+        return sp.csr_matrix((data.reshape(-1)[self.take], self.indices, self.indptr), shape=(n, n))
+
+
+class _Analysing:
+    """A direct backend that orders and analyses the block pattern once, and factorises the values per matrix.
+
+    The factor is kept while the matrix is unchanged (as :class:`_Factorizing`);
+    constrained (saddle-point) systems go to SuperLU's LU with pivoting.
+    """
+
+    name = "base"
+    upper = False  # the backend reads the upper triangle only
+
+    def __init__(self) -> None:
+        self.pattern: _BlockPattern | None = None
+        self.analyses = 0  # symbolic analyses made (benchmarks read them)
+        self.factorizations = 0
+        self._last: tuple[sp.csr_matrix, Factor] | None = None
+        self._saddle = SuperLUSolver()
+
+    def analyse(self, matrix: sp.csr_matrix) -> None:
+        raise NotImplementedError
+
+    def factorize(self, matrix: sp.csr_matrix) -> Factor:
+        raise NotImplementedError
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        if system.n_constraints:
+            return self._saddle.solve(system, rhs)
+        bsr = system.to_bsr()
+        keys = _BlockPattern.keys_of(bsr)
+        pattern = self.pattern
+        positions = None if pattern is None or pattern.n_blocks != system.n_blocks else pattern.positions(keys)
+        if positions is None:
+            if pattern is not None and pattern.n_blocks == system.n_blocks:
+                union = np.union1d(pattern.keys, keys)
+                keys_used = union if len(union) <= _BlockPattern.GROWTH * len(keys) else keys
+            else:
+                keys_used = keys
+            pattern = self.pattern = _BlockPattern(keys_used, system.n_blocks, system.ndof, self.upper)
+            positions = pattern.positions(keys)
+            assert positions is not None
+            matrix = pattern.csr(bsr, positions)
+            self.analyse(matrix)
+            self.analyses += 1
+            self._last = None
+        else:
+            matrix = pattern.csr(bsr, positions)
+        if self._last is not None and np.array_equal(self._last[0].data, matrix.data):
+            factor = self._last[1]
+        else:
+            factor = self.factorize(matrix)
+            self.factorizations += 1
+            self._last = (matrix, factor)
+        return _check(factor(rhs))
+
+
+class CholmodSolver(_Analysing):
+    """CHOLMOD's supernodal Cholesky: ``analyze`` once per block pattern, ``cholesky_inplace`` per matrix."""
+
     name = "cholmod"
 
-    def factor(self, matrix: Matrix, constrained: bool) -> Factor:
-        if constrained:
-            return _saddle_superlu(matrix)
-        from sksparse.cholmod import CholmodError, cholesky
+    def analyse(self, matrix: sp.csr_matrix) -> None:
+        from sksparse.cholmod import analyze
+
+        # a symmetric matrix's CSR arrays are its CSC arrays
+        self._factor = analyze(sp.csc_matrix((matrix.data, matrix.indices, matrix.indptr), shape=matrix.shape))
+
+    def factorize(self, matrix: sp.csr_matrix) -> Factor:
+        from sksparse.cholmod import CholmodError
 
         try:
-            return cholesky(matrix.tocsc())
+            self._factor.cholesky_inplace(sp.csc_matrix((matrix.data, matrix.indices, matrix.indptr),
+                                                        shape=matrix.shape))
         except CholmodError as exc:
             raise SolverError(f"CHOLMOD failed: {exc}") from exc
+        return self._factor
 
 
-class PardisoSolver(_Factorizing):
+class PardisoSolver(_Analysing):
+    """MKL PARDISO for symmetric positive definite matrices (mtype 2, upper triangle).
+
+    Phase 11 (ordering, symbolic factorisation) once per block pattern, phase
+    22 (numerical Cholesky) per matrix, phase 33 (substitution) per solve.
+    pypardiso exposes the phases through ``set_phase`` and its ``_call_pardiso``.
+    """
+
     name = "pardiso"
+    upper = True
 
-    def factor(self, matrix: Matrix, constrained: bool) -> Factor:
+    def analyse(self, matrix: sp.csr_matrix) -> None:
         import pypardiso
 
-        solver = pypardiso.PyPardisoSolver()
-        solver.factorize(matrix)
-        return lambda rhs: solver.solve(matrix, rhs)
+        self._pardiso = pypardiso.PyPardisoSolver(mtype=2)
+        self._pardiso.set_iparm(12, 0)  # CSR input
+        self._phase(11, matrix, np.zeros(matrix.shape[0]))
+
+    def _phase(self, phase: int, matrix: sp.csr_matrix, rhs: np.ndarray) -> np.ndarray:
+        from pypardiso.pardiso_wrapper import PyPardisoError
+
+        self._pardiso.set_phase(phase)
+        try:
+            return self._pardiso._call_pardiso(matrix, np.asfortranarray(rhs))
+        except PyPardisoError as exc:
+            raise SolverError(f"PARDISO failed in phase {phase} (-4: the matrix is not positive definite): "
+                              f"{exc}") from exc
+
+    def factorize(self, matrix: sp.csr_matrix) -> Factor:
+        self._phase(22, matrix, np.zeros(matrix.shape[0]))
+        return lambda rhs: self._phase(33, matrix, rhs)
+
+
+class ConjugateGradientSolver:
+    """Preconditioned conjugate gradient to a displacement tolerance (solvers_iterative module doc).
+
+    ``preconditioner`` is ``"amg"`` (pyamg's smoothed aggregation, built from
+    one matrix and kept while it serves) or ``"jacobi"`` (the inverse block
+    diagonal, rebuilt for every matrix: one batched ndof×ndof inverse). Each
+    solve starts from the previous solution (the open-close iteration changes
+    a few contacts; successive steps move alike). The smallest Ritz value θ
+    of all solves is kept for the stopping rule, so a short warm-started solve
+    uses the estimate of the longer ones. A hierarchy is rebuilt when a solve
+    needs more than ``REBUILD_FACTOR`` times the iterations per decade of
+    residual of the first solve made with it (the matrix has drifted from the
+    one it was built for). Systems with constraint rows (saddle points, not
+    definite) go to the best installed direct backend.
+    """
+
+    REBUILD_FACTOR = 2.0
+    MAX_ITERATIONS = 5000
+
+    def __init__(self, preconditioner: str, tolerance: float = DEFAULT_TOLERANCE) -> None:
+        if preconditioner not in ("amg", "jacobi"):
+            raise ValueError(f"unknown preconditioner {preconditioner!r}; choose 'amg' or 'jacobi'")
+        if not tolerance > 0:
+            raise ValueError(f"the displacement tolerance must be positive, got {tolerance}")
+        self.name = f"cg-{preconditioner}"
+        self.preconditioner = preconditioner
+        self.tolerance = tolerance
+        self.direct = _best_direct()
+        self.iterations: list[int] = []  # per solve (benchmarks and tests read them)
+        self.setups = 0  # preconditioners built
+        self._x: np.ndarray | None = None
+        self._amg: SmoothedAggregation | None = None
+        self._amg_rate: float | None = None  # iterations per decade of the first solve with the hierarchy
+        self._ritz = np.inf
+
+    def _precondition(self, system: BlockSystem, matrix: sp.bsr_matrix) -> Callable[[np.ndarray], np.ndarray]:
+        if self.preconditioner == "jacobi":
+            self.setups += 1
+            return BlockJacobi(system.diag)
+        if self._amg is None or self._amg.hierarchy.levels[0].A.shape != matrix.shape:
+            self._amg = SmoothedAggregation(matrix)
+            self._amg_rate = None
+            self.setups += 1
+        return self._amg
+
+    def _review_hierarchy(self, result: PCGResult) -> None:
+        """Drop the hierarchy when it converges much slower than just after it was built."""
+        if result.decades < 1.0:  # too short a solve to measure a rate
+            return
+        rate = result.iterations / result.decades
+        if self._amg_rate is None:
+            self._amg_rate = max(rate, 1.0)
+        elif rate > self.REBUILD_FACTOR * self._amg_rate:
+            self._amg = None
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        if system.n_constraints:
+            return self.direct.solve(system, rhs)
+        matrix = system.to_bsr()
+        if self._x is None or len(self._x) != len(rhs):
+            self._x, self._ritz = np.zeros_like(rhs), np.inf
+        try:
+            precondition = self._precondition(system, matrix)
+            result = pcg(matrix.__matmul__, precondition, rhs, self._x, self.tolerance, self.MAX_ITERATIONS,
+                         self._ritz)
+        except IterativeSolverError as exc:
+            self._x = None
+            raise SolverError(f"{self.name}: {exc}") from exc
+        self._ritz = result.smallest_ritz
+        self.iterations.append(result.iterations)
+        if self.preconditioner == "amg":
+            self._review_hierarchy(result)
+        self._x = result.x.copy()
+        return _check(result.x)
+
+
+def _best_direct() -> LinearSolver:
+    """The fastest installed direct backend for large systems (measured in docs/performance.md)."""
+    return get_solver(next(n for n in ("pardiso", "cholmod", "superlu") if n in available_solvers()))
 
 
 class AutoSolver:
-    """Dense for tiny systems, the fastest installed sparse backend otherwise."""
+    """The backend by size: dense LAPACK, then a direct factorisation, then the AMG conjugate gradient.
+
+    Up to ``DENSE_LIMIT`` unknowns: dense. Up to ``ITERATIVE_LIMIT`` blocks: the
+    best installed direct backend (:func:`_best_direct`). Above: ``cg-amg``
+    (pyamg is a core dependency), which falls back to the direct backend for
+    a solve it cannot make (a matrix found not positive definite, no
+    convergence); ``fallbacks`` counts them. Thresholds measured in
+    docs/performance.md.
+    """
 
     name = "auto"
 
-    def __init__(self) -> None:
+    def __init__(self, tolerance: float = DEFAULT_TOLERANCE) -> None:
         self.dense = DenseSolver()
-        self.sparse = next(get_solver(n) for n in ("pardiso", "cholmod", "superlu") if n in available_solvers())
+        self.direct = _best_direct()
+        self.iterative = ConjugateGradientSolver("amg", tolerance)
+        self.fallbacks = 0
+
+    def choose(self, system: BlockSystem) -> LinearSolver:
+        """The backend that solves ``system``."""
+        if system.size + system.n_constraints <= DENSE_LIMIT:
+            return self.dense
+        if system.n_blocks <= ITERATIVE_LIMIT or system.n_constraints:
+            return self.direct
+        return self.iterative
 
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
-        chosen = self.dense if system.size + system.n_constraints <= DENSE_LIMIT else self.sparse
-        return chosen.solve(system, rhs)
+        chosen = self.choose(system)
+        if chosen is not self.iterative:
+            return chosen.solve(system, rhs)
+        try:
+            return chosen.solve(system, rhs)
+        except SolverError:
+            self.fallbacks += 1
+            return self.direct.solve(system, rhs)
 
 
-_BACKENDS = {"dense": DenseSolver, "superlu": SuperLUSolver, "cholmod": CholmodSolver,
-             "pardiso": PardisoSolver, "auto": AutoSolver}
+_BACKENDS: dict[str, Callable[..., LinearSolver]] = {
+    "dense": DenseSolver, "superlu": SuperLUSolver, "cholmod": CholmodSolver, "pardiso": PardisoSolver,
+    "cg-amg": lambda tolerance: ConjugateGradientSolver("amg", tolerance),
+    "cg-jacobi": lambda tolerance: ConjugateGradientSolver("jacobi", tolerance),
+    "auto": AutoSolver}
+_ITERATIVE = ("cg-amg", "cg-jacobi", "auto")  # the backends that take a displacement tolerance
 _MODULES = {"cholmod": "sksparse", "pardiso": "pypardiso"}
 SOLVERS = tuple(_BACKENDS)
 
@@ -185,10 +437,10 @@ def available_solvers() -> list[str]:
     return [n for n in _BACKENDS if n not in _MODULES or importlib.util.find_spec(_MODULES[n]) is not None]
 
 
-def get_solver(name: str = "auto") -> LinearSolver:
-    """The backend called ``name`` (see module doc)."""
+def get_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE) -> LinearSolver:
+    """The backend called ``name`` (see module doc); ``tolerance`` (m) is the iterative backends' stopping rule."""
     if name not in _BACKENDS:
         raise ValueError(f"unknown solver {name!r}; choose one of {sorted(_BACKENDS)}")
     if name not in available_solvers():
         raise ValueError(f"solver {name!r} is not installed (pip install srdda[{name}])")
-    return _BACKENDS[name]()
+    return _BACKENDS[name](tolerance) if name in _ITERATIVE else _BACKENDS[name]()
