@@ -176,3 +176,15 @@ def test_a_stale_hierarchy_is_rebuilt():
     assert solver.setups == 2
     exact = SuperLUSolver().solve(stiffer, 1.5 * stiffer.full_rhs())
     assert np.max(np.abs(x - exact)) <= 1e-10
+
+
+def test_the_tolerance_setting_is_checked_and_takes_units():
+    from pydantic import ValidationError
+
+    from srdda import RunSettings
+
+    assert RunSettings(dt=1e-3, n_steps=1, solver_tolerance="2 mm").solver_tolerance == pytest.approx(2e-3)
+    with pytest.raises(ValidationError, match="solver_tolerance"):
+        RunSettings(dt=1e-3, n_steps=1, solver_tolerance=0.0)
+    with pytest.raises(ValueError, match="tolerance must be positive"):
+        get_solver("cg-amg", -1.0)

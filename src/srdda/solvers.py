@@ -1,23 +1,37 @@
 """The linear-solver seam: one small interface, several backends.
 
-``get_solver(name)`` returns an object with ``solve(system, rhs) -> x`` for a
-:class:`~srdda.assembly.BlockSystem`. Backends:
+``get_solver(name, tolerance)`` returns an object with ``solve(system, rhs) -> x``
+for a :class:`~srdda.assembly.BlockSystem`; one instance serves one run and
+keeps what the next solve can reuse (a factor, an analysis, a preconditioner,
+the last solution). Backends (measured in docs/performance.md):
 
 * ``dense``: LAPACK (numpy) on the dense matrix; fastest for a handful of blocks.
-* ``superlu``: scipy's SuperLU with a symmetric ordering; always available.
-* ``cholmod``: CHOLMOD via scikit-sparse (``pip install srdda[cholmod]``);
-  needs a symmetric positive definite matrix (every penalty-only DDA system is).
-* ``pardiso``: MKL PARDISO via pypardiso (``pip install srdda[pardiso]``).
-* ``auto``: dense up to ``DENSE_LIMIT`` unknowns, else pardiso, cholmod or
-  superlu, the first that is installed.
+* ``superlu``: scipy's SuperLU with a symmetric ordering; always available. It
+  keeps its factor while the matrix is unchanged; it cannot keep an ordering
+  or a symbolic analysis, so every new matrix is ordered and factorised anew.
+* ``cholmod``: CHOLMOD via scikit-sparse (``pip install srdda[cholmod]``) and
+  ``pardiso``: MKL PARDISO via pypardiso (``pip install srdda[pardiso]``):
+  Cholesky of the symmetric positive definite matrix (every unconstrained DDA
+  system), with the fill-reducing ordering and the symbolic analysis made once
+  per block pattern and reused while the pattern of later matrices lies inside
+  it (:class:`_BlockPattern`): contacts that open and close change values, not
+  the analysis.
+* ``cg-amg``, ``cg-jacobi``: the preconditioned conjugate gradient
+  (:mod:`srdda.solvers_iterative`) with smoothed-aggregation multigrid (pyamg)
+  or block-Jacobi, warm-started from the previous solution, stopping when every
+  unknown of Δd is estimated within ``tolerance`` (m) of the exact solution.
+* ``auto``: dense up to ``DENSE_LIMIT`` unknowns, the best installed direct
+  backend (pardiso, cholmod, superlu) up to ``ITERATIVE_LIMIT`` blocks,
+  ``cg-amg`` above (falling back to the direct backend for a solve it cannot
+  make).
 
 A system with constraint rows (``system.n_constraints > 0``) is the saddle
 point [[A, Cᵀ], [C, 0]]·[Δd; μ] = [F; g]; ``rhs`` then has n + nc entries and
-the solution holds Δd followed by μ. It is symmetric indefinite, so every
-backend solves it by LU of the augmented matrix with pivoting: LAPACK's
-Bunch-Kaufman LDLᵀ (``dense``), SuperLU with partial pivoting and a COLAMD
-ordering (``superlu``, also used by ``cholmod``, whose Cholesky needs a
-definite matrix), PARDISO (``pardiso``). See docs/constraints.md.
+the solution holds Δd followed by μ. It is symmetric indefinite, so it is
+solved by LU of the augmented matrix with pivoting: LAPACK's Bunch-Kaufman
+LDLᵀ (``dense``), SuperLU with partial pivoting and a COLAMD ordering (every
+sparse backend: Cholesky and the conjugate gradient need a definite matrix).
+See docs/constraints.md.
 """
 from __future__ import annotations
 
@@ -284,6 +298,8 @@ class PardisoSolver(_Analysing):
     def analyse(self, matrix: sp.csr_matrix) -> None:
         import pypardiso
 
+        if getattr(self, "_pardiso", None) is not None:
+            self._pardiso.free_memory(everything=True)  # MKL's memory of the previous analysis
         self._pardiso = pypardiso.PyPardisoSolver(mtype=2)
         self._pardiso.set_iparm(12, 0)  # CSR input
         self._phase(11, matrix, np.zeros(matrix.shape[0]))
