@@ -22,8 +22,8 @@ the last solution). Backends (measured in docs/performance.md):
   unknown of Δd is estimated within ``tolerance`` (m) of the exact solution.
 * ``auto``: dense up to ``DENSE_LIMIT`` unknowns, the best installed direct
   backend (pardiso, cholmod, superlu) up to ``ITERATIVE_LIMIT`` blocks,
-  ``cg-amg`` above (falling back to the direct backend for a solve it cannot
-  make).
+  ``cg-jacobi`` above (falling back to the direct backend for a solve it
+  cannot make).
 
 A system with constraint rows (``system.n_constraints > 0``) is the saddle
 point [[A, Cᵀ], [C, 0]]·[Δd; μ] = [F; g]; ``rhs`` then has n + nc entries and
@@ -54,7 +54,7 @@ __all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "DE
            "DEFAULT_TOLERANCE", "SOLVERS"]
 
 DENSE_LIMIT = 120  # unknowns: LAPACK on the dense matrix up to here (20 blocks in 2D)
-ITERATIVE_LIMIT = 500  # blocks: ``auto`` uses a direct factorisation up to here, the AMG conjugate gradient above
+ITERATIVE_LIMIT = 500  # blocks: ``auto`` uses a direct factorisation up to here, the conjugate gradient above
 # The iterative backends stop when every unknown of the increment is estimated within this of the exact
 # solution (m; rad and 1 for rotations and strains, i.e. m per m of block size): 1e-9 m keeps 200 steps
 # of the 1,000-block slope within the issue's 1e-6 m of the direct run even if the errors all added up.
@@ -416,14 +416,15 @@ def _best_direct() -> LinearSolver:
 
 
 class AutoSolver:
-    """The backend by size: dense LAPACK, then a direct factorisation, then the AMG conjugate gradient.
+    """The backend by size: dense LAPACK, then a direct factorisation, then the block-Jacobi conjugate gradient.
 
     Up to ``DENSE_LIMIT`` unknowns: dense. Up to ``ITERATIVE_LIMIT`` blocks: the
-    best installed direct backend (:func:`_best_direct`). Above: ``cg-amg``
-    (pyamg is a core dependency), which falls back to the direct backend for
-    a solve it cannot make (a matrix found not positive definite, no
-    convergence); ``fallbacks`` counts them. Thresholds measured in
-    docs/performance.md.
+    best installed direct backend (:func:`_best_direct`). Above: ``cg-jacobi``,
+    which falls back to the direct backend for a solve it cannot make (a
+    matrix found not positive definite, no convergence); ``fallbacks`` counts
+    them. Why block-Jacobi and not the multigrid, and the thresholds: measured
+    in docs/performance.md (the open-close iteration's warm-started solves
+    need a few cheap iterations, where a hierarchy is rebuilt often).
     """
 
     name = "auto"
@@ -431,7 +432,7 @@ class AutoSolver:
     def __init__(self, tolerance: float = DEFAULT_TOLERANCE) -> None:
         self.dense = DenseSolver()
         self.direct = _best_direct()
-        self.iterative = ConjugateGradientSolver("amg", tolerance)
+        self.iterative = ConjugateGradientSolver("jacobi", tolerance)
         self.fallbacks = 0
 
     def choose(self, system: BlockSystem) -> LinearSolver:
