@@ -22,10 +22,11 @@ Systems*, 2nd ed., §6.7.3): θ ≥ λ_min and decreases towards it as the
 iteration goes on, and no larger than the estimate given by the caller (from
 earlier solves, or from :func:`smallest_eigenvalue_estimate` when a
 preconditioner is built), so that a short warm-started solve, whose Krylov
-space has not met the slowest modes, does not trust its own θ. The rule applies the M-norm bound to the largest unknown (the
-norm that a user reads, in metres); tests/test_solvers_iterative.py checks it
-against the direct solve on brick-wall systems with contacts 1 to 1000 times
-stiffer than the blocks.
+space has not met the slowest modes, does not trust its own θ. The rule
+applies the M-norm bound to the largest unknown (the norm that a user reads,
+in metres): it is an estimate, not a bound, so tests/test_solvers_iterative.py
+checks it against the direct solve on every solve of brick-wall steps with
+contacts 20 and 1,000 times stiffer than the inertia term.
 """
 from __future__ import annotations
 
