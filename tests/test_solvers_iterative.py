@@ -187,3 +187,16 @@ def test_the_tolerance_setting_is_checked_and_takes_units():
         RunSettings(dt=1e-3, n_steps=1, solver_tolerance=0.0)
     with pytest.raises(ValueError, match="tolerance must be positive"):
         get_solver("cg-amg", -1.0)
+
+
+@pytest.mark.parametrize("preconditioner", ["amg", "jacobi"])
+def test_3d_blocks_of_twelve_unknowns(preconditioner):
+    rng = np.random.default_rng(3)
+    n_blocks = 200
+    a = rng.normal(size=(n_blocks, 12, 12))
+    system = BlockSystem(np.einsum("nij,nkj->nik", a, a) + 12 * np.eye(12), rng.normal(size=(n_blocks, 12)))
+    i = np.arange(n_blocks - 1)
+    system.add_off_diagonal(i, i + 1, 0.5 * rng.normal(size=(n_blocks - 1, 12, 12)))
+    x = ConjugateGradientSolver(preconditioner, 1e-10).solve(system, system.full_rhs())
+    exact = SuperLUSolver().solve(system, system.full_rhs())
+    assert np.max(np.abs(x - exact)) <= 1e-10  # the tolerance asked for
