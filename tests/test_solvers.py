@@ -1,11 +1,13 @@
-"""The solver seam: a factorisation is reused while the assembled matrix is unchanged."""
+"""The solver seam: a factorisation is reused while the matrix is unchanged, an analysis while its pattern is."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+import scipy.sparse.linalg as spla
+
 from srdda.assembly.system import BlockSystem
-from srdda.solvers import get_solver
+from srdda.solvers import _Analysing, _BlockPattern, available_solvers, get_solver
 
 
 def _system(n_blocks: int, seed: int = 0) -> BlockSystem:
@@ -33,3 +35,65 @@ def test_factor_reused_while_the_matrix_is_unchanged(name):
     x = solver.solve(changed, changed.rhs.ravel())
     np.testing.assert_allclose(changed.to_dense() @ x, changed.rhs.ravel(), atol=1e-10)
     assert solver.factorizations == 2  # a changed value is a new factorisation, never a stale one
+
+
+class _CountingAnalysis(_Analysing):
+    """An analysing backend on SuperLU (always installed) that counts its analyses and factorisations."""
+
+    name = "counting"
+
+    def analyse(self, matrix):
+        self.analysed_nnz = matrix.nnz
+
+    def factorize(self, matrix):
+        return spla.splu(matrix.tocsc()).solve
+
+
+def _with_couplings(pairs: list[tuple[int, int]], n_blocks: int = 12, seed: int = 0) -> BlockSystem:
+    """An SPD block system whose off-diagonal blocks couple ``pairs`` (as contacts do)."""
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(n_blocks, 6, 6))
+    system = BlockSystem(np.einsum("nij,nkj->nik", a, a) + 6 * np.eye(6), rng.normal(size=(n_blocks, 6)))
+    i, j = np.array(pairs).T
+    system.add_off_diagonal(i, j, 0.1 * rng.normal(size=(len(pairs), 6, 6)))
+    return system
+
+
+def _backends_with_analysis():
+    return [_CountingAnalysis(), *(get_solver(n) for n in ("cholmod", "pardiso") if n in available_solvers())]
+
+
+@pytest.mark.parametrize("solver", _backends_with_analysis(), ids=lambda s: s.name)
+def test_the_analysis_is_reused_while_the_pattern_stays_inside(solver):
+    chain = [(k, k + 1) for k in range(11)]
+    steps = [
+        (_with_couplings(chain), 1),  # first matrix: analysed
+        (_with_couplings(chain[:5] + chain[6:], seed=1), 1),  # a contact opened: inside the pattern
+        (_with_couplings(chain, seed=2), 1),  # it closed again
+        (_with_couplings(chain + [(0, 5)], seed=3), 2),  # a new coupling: analysed on the union
+        (_with_couplings(chain, seed=4), 2),  # inside the union
+        (_with_couplings([(0, 11), (3, 9)], seed=5), 3),  # a different pattern: analysed again
+    ]
+    for system, analyses in steps:
+        x = solver.solve(system, system.rhs.ravel())
+        # residual of an O(1), diagonally dominant system: round-off
+        np.testing.assert_allclose(system.to_dense() @ x, system.rhs.ravel(), atol=1e-10)
+        assert solver.analyses == analyses
+    assert solver.factorizations == len(steps)
+    solver.solve(system, 2.0 * system.rhs.ravel())
+    assert solver.factorizations == len(steps)  # the same matrix again: the factor is reused
+
+
+def test_the_block_pattern_writes_a_matrix_with_explicit_zeros():
+    system = _with_couplings([(0, 1), (2, 5)])
+    bsr = system.to_bsr()
+    keys = _BlockPattern.keys_of(bsr)
+    wider = np.union1d(keys, [3 * 12 + 4, 4 * 12 + 3])
+    for upper in (False, True):
+        pattern = _BlockPattern(wider, 12, 6, upper)
+        matrix = pattern.csr(bsr, pattern.positions(keys))
+        expected = np.triu(system.to_dense()) if upper else system.to_dense()
+        np.testing.assert_array_equal(matrix.toarray(), expected)
+        assert matrix.nnz == (len(wider) * 36 + 12 * 6) // 2 if upper else len(wider) * 36
+        assert matrix.has_sorted_indices
+    assert _BlockPattern(keys, 12, 6, False).positions(wider) is None

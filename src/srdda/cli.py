@@ -60,7 +60,7 @@ def _compile(model: Model, settings: RunSettings, source: str) -> ModelArrays:
     """The model's arrays, checked with its run settings as the run will check them (one message, exit 2)."""
     try:
         arrays = model.arrays()
-        Stepper(arrays, settings, get_solver(settings.solver))
+        Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance))
     except ModelError as exc:
         raise click.UsageError(f"{source}: {exc}") from None
     return arrays

@@ -26,7 +26,7 @@ from pydantic.dataclasses import dataclass
 from .integrators.methods import METHODS, Method, method_preset
 from .integrators.schemes import SCHEMES
 from .units import to_si
-from .solvers import SOLVERS, available_solvers
+from .solvers import DEFAULT_TOLERANCE, SOLVERS, available_solvers
 
 __all__ = ["RunSettings", "MIN_DT", "MAX_DT", "MAX_STEPS", "MAX_STEP_CUT_FACTOR"]
 
@@ -60,6 +60,7 @@ Finite = AfterValidator(_finite)
 Seconds = Annotated[float, _unit("time"), Finite]
 NewtonsPerMetre = Annotated[float, _unit("stiffness"), Finite]
 Degrees = Annotated[float, _unit("angle"), Finite]
+Metres = Annotated[float, _unit("length"), Finite]
 Ratio = Annotated[float, Finite]
 
 
@@ -83,6 +84,9 @@ class RunSettings:
     linearization: Literal["start", "secant"] | None = None  # override the method's linearisation
     penalty: Annotated[NewtonsPerMetre, Field(gt=0)] = 1e9  # default stiffness of fixed points (N/m)
     solver: Annotated[Literal[SOLVERS], AfterValidator(_installed)] = "auto"
+    # the iterative backends (cg-amg, cg-jacobi; auto above ITERATIVE_LIMIT blocks) stop when every unknown
+    # of the increment is estimated within this of the exact solution (m): docs/performance.md
+    solver_tolerance: Annotated[Metres, Field(gt=0, le=1.0)] = DEFAULT_TOLERANCE
     # The secant pass stops when |Δθ|·|δθ| (δθ: change of the rotation increment between two solves)
     # is below this: the mismatch between the linearised and the exact rotation displacement of a
     # point, per metre of lever arm, is about half of it.

@@ -46,7 +46,7 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     accepted step, ends the run (completed, that step recorded) when it returns True.
     """
     arrays = model.arrays() if isinstance(model, Model) else model
-    stepper = Stepper(arrays, settings, get_solver(settings.solver))
+    stepper = Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance))
     state = state if state is not None else initial_state(arrays, stepper.method)
     result = Result(arrays.block_names, stepper.method.name, keep_history)
     sinks: list[Recorder] = [result, *recorders]

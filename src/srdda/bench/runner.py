@@ -46,6 +46,7 @@ from ..contact.term import ContactModel, ContactStep
 from ..model import Model
 from ..settings import RunSettings
 from ..step import Stepper
+from ..solvers import DEFAULT_TOLERANCE
 from .models import brick_wall, jointed_slope
 
 __all__ = ["BenchCase", "CASES", "QUICK", "REQUIRED_KEYS", "run_cases", "format_table"]
@@ -137,8 +138,8 @@ class Probe:
 
         get_solver = simulation.get_solver
 
-        def timed_solver(name: str = "auto") -> Any:
-            return _TimedSolver(get_solver(name), probe)
+        def timed_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE) -> Any:
+            return _TimedSolver(get_solver(name, tolerance), probe)
 
         Stepper.step = counted_step  # type: ignore[method-assign]
         ContactModel.prepare = self.timed("detection", counted_prepare)  # type: ignore[method-assign]
