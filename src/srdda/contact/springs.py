@@ -2,7 +2,7 @@
 
 A contact is vertex v of block a against edge p0 -> p1 of block b (unit
 tangent t, outward normal n). With the shape functions T of the method
-(:meth:`srdda.simulation.StepContext.shape_at`) the end-of-step normal gap
+(:meth:`srdda.term.StepContext.shape_at`) the end-of-step normal gap
 and shear displacement are, to first order in the step's unknowns Δd,
 
     g_n = g_0 + n·(T_a(v) Δd_a - T_b(q) Δd_b),        q the projection of v,
