@@ -41,14 +41,16 @@ def add_cut_blocks(model: Model, cut: BlockCut, materials: Mapping[int, str],
 
 
 def add_cut_polyhedra(model: Model, cut: PolyhedralCut, materials: str | Mapping[int, str],
-                      fixed: Sequence[bool] | np.ndarray | None = None, prefix: str = "block") -> list[int]:
+                      fixed: Sequence[bool] | np.ndarray | None = None, prefix: str = "block",
+                      joints: Mapping[int, str | None] | None = None) -> list[int]:
     """Add every block of a 3D cut to ``model``; returns their indices.
 
     ``materials``: one material name for all blocks, or a map from the
     domain part index (``cut.block_part``) to a material name. ``fixed``
-    marks blocks that never move. The faces' joint types
-    (``cut.face_joint``) stay with the cut: joint materials between 3D blocks
-    are chosen by block materials (``joint_materials.between``).
+    marks blocks that never move. ``joints`` maps joint types
+    (``cut.face_joint``) to joint-material names, as :func:`add_cut_blocks`
+    does in 2D: a face on a joint of a listed type takes that joint
+    material; other faces take the one chosen by the block materials.
     """
     by_part = {int(p): materials for p in np.unique(cut.block_part)} if isinstance(materials, str) \
         else dict(materials)
@@ -58,5 +60,10 @@ def add_cut_polyhedra(model: Model, cut: PolyhedralCut, materials: str | Mapping
     fixed_arr = np.zeros(cut.n_blocks, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
     if fixed_arr.shape != (cut.n_blocks,):
         raise ModelError(f"fixed needs one flag per block ({cut.n_blocks}), got {fixed_arr.shape}")
+    joints = {} if joints is None else dict(joints)
+    face_joints = None
+    if joints:
+        named = [joints.get(int(t)) if t != NO_JOINT else None for t in cut.face_joint]
+        face_joints = [named[cut.face_first[b]:cut.face_first[b + 1]] for b in range(cut.n_blocks)]
     return model.add_polyhedra(cut.blocks(), [by_part[int(p)] for p in cut.block_part],
-                               [f"{prefix} {b}" for b in range(cut.n_blocks)], fixed_arr.tolist())
+                               [f"{prefix} {b}" for b in range(cut.n_blocks)], fixed_arr.tolist(), face_joints)

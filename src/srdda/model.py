@@ -103,6 +103,7 @@ class _Block:
     fixed: bool = False
     edge_joints: tuple[str | None, ...] | None = None  # joint material of edge i (vertex i to i+1)
     faces: list[np.ndarray] | None = None  # a polyhedron's outward faces (3D); None for a polygon
+    face_joints: tuple[str | None, ...] | None = None  # joint material of face i (3D)
 
 
 @dataclass(frozen=True)
@@ -141,6 +142,7 @@ class ModelArrays:
     joint_by_materials: np.ndarray  # (nm, nm) joint index for a pair of block materials
     links: ConstraintArrays  # hinges, springs, prescribed motion
     mesh: PolyhedronMesh | None = None  # the faces of 3D blocks (None in 2D)
+    face_joint: np.ndarray | None = None  # (nf,) joint material of each mesh face, -1 = by materials (3D)
 
     @property
     def n_blocks(self) -> int:
@@ -266,6 +268,7 @@ class Model:
         stress: Sequence[float] = (0.0,) * 6,
         name: str | None = None,
         fixed: bool = False,
+        face_joints: Sequence[str | None] | None = None,
     ) -> int:
         """Add a polyhedral block (3D): vertices (n, 3) and faces as lists of vertex indices; returns its index.
 
@@ -274,6 +277,8 @@ class Model:
         :func:`srdda.geometry.polyhedron.normalize_polyhedron`). ``stress`` is
         (σx, σy, σz, τyz, τzx, τxy) in Pa; ``angular_velocity`` (ωx, ωy, ωz) in rad/s.
         ``srdda.geometry.polyhedron.box`` and ``prism`` make (vertices, faces).
+        ``face_joints`` names the joint material of each face (None: the one
+        chosen by the block materials); a contact on a face takes the face's.
         """
         index = len(self.blocks)
         label = name or f"block {index}"
@@ -289,15 +294,31 @@ class Model:
         if len(s) != SOLID.n_strain:
             raise ModelError(f"{label}: stress must be [sx, sy, sz, tyz, tzx, txy]")
         mat_index = list(self.materials).index(material)
-        self.blocks.append(_Block(verts, mat_index, (*v, *w), s, label, bool(fixed), None, outward))
+        self.blocks.append(_Block(verts, mat_index, (*v, *w), s, label, bool(fixed), None, outward,
+                                  self._face_joints(face_joints, len(outward), label)))
         return index
 
+    def _face_joints(self, face_joints: Sequence[str | None] | None, n_faces: int, label: str
+                     ) -> tuple[str | None, ...] | None:
+        """Checked joint-material names of a polyhedron's faces (None when none is named)."""
+        if face_joints is None:
+            return None
+        joints = tuple(face_joints)
+        if len(joints) != n_faces:
+            raise ModelError(f"{label}: face_joints needs one entry per face ({n_faces}), got {len(joints)}")
+        for j in joints:
+            if j is not None and j not in self.joint_materials:
+                raise ModelError(f"{label}: unknown joint material {j!r}")
+        return joints if any(j is not None for j in joints) else None
+
     def add_polyhedra(self, blocks: Sequence[tuple[object, object]], materials: Sequence[str],
-                      names: Sequence[str], fixed: Sequence[bool]) -> list[int]:
+                      names: Sequence[str], fixed: Sequence[bool],
+                      face_joints: Sequence[Sequence[str | None] | None] | None = None) -> list[int]:
         """Add many polyhedral blocks at rest, validated together (fast for thousands); returns their indices.
 
         ``blocks`` are (vertices, faces) pairs, with one material, name and
-        fixed flag each; otherwise as :meth:`add_polyhedron`.
+        fixed flag each (and optionally the faces' joint materials); otherwise
+        as :meth:`add_polyhedron`.
         """
         if not len(blocks) == len(materials) == len(names) == len(fixed):
             raise ModelError("add_polyhedra: give one material, name and fixed flag per block")
@@ -310,9 +331,13 @@ class Model:
         mat_index = {name: k for k, name in enumerate(self.materials)}
         first = len(self.blocks)
         rest = (0.0,) * (2 * SOLID.dim)
-        for (verts, outward), mat, name, fix in zip(normalize_polyhedra(blocks, names), materials, names, fixed):
+        joints = [None] * len(blocks) if face_joints is None else list(face_joints)
+        if len(joints) != len(blocks):
+            raise ModelError("add_polyhedra: give face_joints for every block (or None)")
+        for (verts, outward), mat, name, fix, fj in zip(normalize_polyhedra(blocks, names), materials, names, fixed,
+                                                         joints):
             self.blocks.append(_Block(verts, mat_index[mat], rest, (0.0,) * SOLID.n_strain, name, bool(fix), None,
-                                      outward))
+                                      outward, self._face_joints(fj, len(outward), name)))
         return list(range(first, len(self.blocks)))
 
     @property
@@ -621,6 +646,10 @@ class Model:
             np.full(len(b.vertices), -1) if b.edge_joints is None
             else np.array([-1 if j is None else joint_names.index(j) + 1 for j in b.edge_joints])
             for b in self.blocks]).astype(np.int64)
+        face_joint = None if mesh is None else np.concatenate([
+            np.full(len(b.faces), -1) if b.face_joints is None
+            else np.array([-1 if j is None else joint_names.index(j) + 1 for j in b.face_joints])
+            for b in self.blocks]).astype(np.int64)
         vertices = np.concatenate([b.vertices for b in self.blocks])
         if bt is PLANE and not self.allow_overlap:
             self._check_overlaps(vertices, block_ptr)
@@ -654,6 +683,7 @@ class Model:
             joint_by_materials=by_mats,
             links=links,
             mesh=mesh,
+            face_joint=face_joint,
         )
 
 

@@ -512,6 +512,30 @@ class SolidContactModel:
                                           self.params.max_penetration)
         return found, surface
 
+    def joint_index(self, found: np.ndarray, geom: SolidContactGeometry) -> np.ndarray:
+        """Row of ``joint_properties`` of every contact: the contacted face's joint material.
+
+        A vertex-face contact takes its face's (``ModelArrays.face_joint``), an
+        edge-edge contact the one named on either face of b's edge, else a's
+        (the larger index when both are named); contacts on faces with none
+        take the joint chosen by the two blocks' materials (as 2D edges do).
+        """
+        arr = self.arrays
+        by_materials = arr.joint_by_materials[arr.block_material[geom.block_a], arr.block_material[geom.block_b]]
+        face_joint = arr.face_joint
+        if face_joint is None or not np.any(face_joint >= 0):
+            return by_materials
+        named = np.full(len(found), -1, dtype=np.int64)
+        vf = found[:, 0] == VERTEX_FACE
+        named[vf] = face_joint[found[vf, 2]]
+        ee = ~vf
+        if np.any(ee):
+            faces_b = self.topology.edge_faces[found[ee, 2]]
+            faces_a = self.topology.edge_faces[found[ee, 1]]
+            on_b = np.max(face_joint[faces_b], axis=1)
+            named[ee] = np.where(on_b >= 0, on_b, np.max(face_joint[faces_a], axis=1))
+        return np.where(named >= 0, named, by_materials)
+
     def bond_area(self, found: np.ndarray, surface: SurfaceGeometry, normal: np.ndarray) -> np.ndarray:
         """Area over which a V-F contact's cohesion and tension act: its share of a's faces that lie on the face.
 
@@ -556,8 +580,7 @@ class SolidContactModel:
         keep_reference = kept.copy()
         keep_reference[kept] = previous.state[src] == LOCKED
         reference[keep_reference] = previous.reference[old[keep_reference]]
-        joint = arr.joint_properties[arr.joint_by_materials[arr.block_material[geom.block_a],
-                                                            arr.block_material[geom.block_b]]]
+        joint = arr.joint_properties[self.joint_index(found, geom)]
         dragged = kept.copy()
         dragged[kept] = previous.state[src] == SLIDING
         dragged &= ~geom.is_edge

@@ -204,7 +204,24 @@ def _add_cutting(model: Model, c: CuttingSection) -> None:
         reasons = sorted({s.reason for s in cut.skipped})
         warnings.warn(f"cutting: {len(cut.skipped)} joint cut(s) skipped ({'; '.join(reasons) or 'none'}), "
                       f"{len(cut.rejected)} fragment(s) rejected; srdda.cut_polyhedra lists them", stacklevel=2)
-    add_cut_polyhedra(model, cut, {k: d.material for k, d in enumerate(c.domain)}, fixed, prefix="cut")
+    add_cut_polyhedra(model, cut, {k: d.material for k, d in enumerate(c.domain)}, fixed, prefix="cut",
+                      joints=_cut_joint_materials(model, c))
+
+
+def _cut_joint_materials(model: Model, c: CuttingSection) -> dict[int, str]:
+    """Joint type -> joint material of the sets and joints that name one (one material per type)."""
+    out: dict[int, str] = {}
+    named = [(f"joint_sets[{k}]", s) for k, s in enumerate(c.joint_sets)] + \
+        [(f"joints[{k}]", j) for k, j in enumerate(c.joints)]
+    for where, j in named:
+        if j.joint_material is None:
+            continue
+        if j.joint_material not in model.joint_materials:
+            raise ModelError(f"{where}.joint_material: unknown joint material {j.joint_material!r}")
+        if out.setdefault(j.joint_type, j.joint_material) != j.joint_material:
+            raise ModelError(f"{where}.joint_material: joint_type {j.joint_type} already has joint material "
+                             f"{out[j.joint_type]!r}; give this set its own joint_type")
+    return out
 
 
 def _history(h: HistorySection, where: str) -> MotionHistory:

@@ -198,6 +198,7 @@ class JointSetSection(_Strict):
     origin: Point3 = (0.0, 0.0, 0.0)
     spacing_sd: Length = Field(0.0, ge=0)
     joint_type: int = 1
+    joint_material: str | None = None  # a name of [joint_materials] for the faces this set makes
 
 
 class JointSection(_Strict):
@@ -208,6 +209,7 @@ class JointSection(_Strict):
     dip_direction: Angle
     radius: Length | None = Field(None, gt=0)
     joint_type: int = 1
+    joint_material: str | None = None  # a name of [joint_materials] for the faces this joint makes
 
 
 class CuttingSection(_Strict):
