@@ -47,3 +47,17 @@ def test_penalty_pair_is_symmetric_and_pulls_the_gap_closed():
     rhs[6:] = 0
     d = np.linalg.solve(A, rhs)
     assert np.allclose(d[:2], -gap[0], atol=1e-15)
+
+
+def test_scatter_add_is_np_add_at_bit_for_bit():
+    # the compiled scatter adds in the same order as np.add.at, so the sums are the same bits
+    from srdda.assembly.system import scatter_add
+    rng = np.random.default_rng(3)
+    index = rng.integers(0, 7, size=200)
+    for shape in [(7, 6), (7, 6, 6), (7, 12, 12)]:
+        values = rng.normal(size=(200, *shape[1:])) * 10.0 ** rng.integers(-8, 8, size=(200,) + (1,) * (len(shape) - 1))
+        expected = rng.normal(size=shape)
+        got = expected.copy()
+        np.add.at(expected, index, values)
+        scatter_add(got, index, values)
+        assert np.array_equal(got, expected)

@@ -213,6 +213,9 @@ def _draw_configuration(ax: plt.Axes, arrays: Any, labels: Sequence[str] | None)
     """Blocks, supports, springs, hinges, driven, loaded and measured points of ``arrays`` on ``ax``."""
     coll = plot_blocks(ax, arrays.vertices, arrays.block_ptr)
     coll.set_facecolor(list(np.where(arrays.block_fixed, "0.8", "#c8d6e5")))
+    if np.any(arrays.block_fixed):  # legend entries for the two fills
+        ax.fill([], [], facecolor="0.8", edgecolor="k", lw=0.5, label="fixed block")
+        ax.fill([], [], facecolor="#c8d6e5", edgecolor="k", lw=0.5, label="moving block")
     pts = arrays.points
     links = arrays.links
     if len(arrays.fixed_rows):

@@ -16,8 +16,33 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit
 
-__all__ = ["BlockSystem", "PenaltyPairs", "add_penalty_pairs"]
+__all__ = ["BlockSystem", "PenaltyPairs", "add_penalty_pairs", "scatter_add"]
+
+
+@njit(cache=True)
+def _scatter_rows(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+    for i in range(index.shape[0]):
+        row = index[i]
+        for j in range(values.shape[1]):
+            target[row, j] += values[i, j]
+
+
+def scatter_add(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+    """``target[index[i]] += values[i]`` for every i, repeated indices summed in order.
+
+    What ``np.add.at`` does, compiled: the per-contact scatter of the step's
+    assembly (``np.add.at`` on (n, 6, 6) blocks was a tenth of a contact
+    step's time). The same order of additions gives the same bits.
+    """
+    if len(index) == 0:
+        return
+    if not target.flags.c_contiguous:
+        np.add.at(target, index, values)
+        return
+    _scatter_rows(target.reshape(len(target), -1), np.ascontiguousarray(index, dtype=np.int64),
+                  np.ascontiguousarray(values, dtype=np.float64).reshape(len(index), -1))
 
 
 @dataclass
@@ -222,8 +247,8 @@ def add_penalty_pairs(system: BlockSystem, pairs: PenaltyPairs, factor: float) -
     k = pairs.stiffness
     ta = pairs.t_a
     kta = k[:, None, None] * ta
-    np.add.at(system.diag, pairs.block_a, factor * np.einsum("nki,nkj->nij", kta, ta))
-    np.add.at(system.rhs, pairs.block_a, -np.einsum("nki,nk->ni", kta, pairs.gap))
+    scatter_add(system.diag, pairs.block_a, factor * np.einsum("nki,nkj->nij", kta, ta))
+    scatter_add(system.rhs, pairs.block_a, -np.einsum("nki,nk->ni", kta, pairs.gap))
     if pairs.t_b is None:
         return
     linked = pairs.block_b >= 0
@@ -233,10 +258,10 @@ def add_penalty_pairs(system: BlockSystem, pairs: PenaltyPairs, factor: float) -
     b = pairs.block_b[linked]
     tb = pairs.t_b[linked]
     ktb = k[linked, None, None] * tb
-    np.add.at(system.diag, b, factor * np.einsum("nki,nkj->nij", ktb, tb))
-    np.add.at(system.rhs, b, np.einsum("nki,nk->ni", ktb, pairs.gap[linked]))
+    scatter_add(system.diag, b, factor * np.einsum("nki,nkj->nij", ktb, tb))
+    scatter_add(system.rhs, b, np.einsum("nki,nk->ni", ktb, pairs.gap[linked]))
     cross = -factor * np.einsum("nki,nkj->nij", kta[linked], tb)
     same = a == b
     if np.any(same):
-        np.add.at(system.diag, a[same], cross[same] + np.swapaxes(cross[same], 1, 2))
+        scatter_add(system.diag, a[same], cross[same] + np.swapaxes(cross[same], 1, 2))
     system.add_off_diagonal(a[~same], b[~same], cross[~same])

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..assembly.system import scatter_add
 from ..term import LEDGER, StepContext, Term
 
 if TYPE_CHECKING:
@@ -37,7 +38,7 @@ class PointLoadTerm(Term):
         lr = ctx.arrays.load_rows
         blocks = ctx.arrays.point_block[lr]
         T = ctx.shape_at(blocks, ctx.state.points[lr])
-        np.add.at(system.rhs, blocks, np.einsum("nki,nk->ni", T, point_load_forces(ctx.arrays, ctx.t_load)))
+        scatter_add(system.rhs, blocks, np.einsum("nki,nk->ni", T, point_load_forces(ctx.arrays, ctx.t_load)))
 
     def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
         lr = ctx.arrays.load_rows

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
+from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
 from ..geometry.polyhedron import PolyhedronMesh
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays, ModelError
 from ..term import LEDGER, StepContext, StepCut, Term
@@ -383,8 +383,8 @@ class SolidContactStep:
         if np.any(sliding):
             # Coulomb friction opposing the slip of x_a over b, N of the last solve (Shi)
             force = np.einsum("nk,nki->ni", self.applied[sliding], g.frame[sliding])
-            np.add.at(system.rhs, a[sliding], np.einsum("nij,ni->nj", ta[sliding], force))
-            np.add.at(system.rhs, b[sliding], -np.einsum("nij,ni->nj", tb[sliding], force))
+            scatter_add(system.rhs, a[sliding], np.einsum("nij,ni->nj", ta[sliding], force))
+            scatter_add(system.rhs, b[sliding], -np.einsum("nij,ni->nj", tb[sliding], force))
 
     def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         assert self._shapes is not None

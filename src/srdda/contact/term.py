@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
+from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays
 from ..term import LEDGER, StepContext, StepCut, Term
 from .broadphase import block_boxes, candidate_pairs
@@ -136,8 +136,8 @@ class ContactStep:
             # Coulomb friction opposing the slip of v along the edge, N of the last solve (Shi 1988)
             magnitude = self.friction[sliding]
             force = magnitude[:, None] * g.tangent[sliding]
-            np.add.at(system.rhs, a[sliding], np.einsum("nki,nk->ni", tv[sliding], force))
-            np.add.at(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tq[sliding], force))
+            scatter_add(system.rhs, a[sliding], np.einsum("nki,nk->ni", tv[sliding], force))
+            scatter_add(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tq[sliding], force))
 
     def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         assert self._shapes is not None

@@ -346,6 +346,8 @@ def model_arrays_from_file(path: str | Path) -> ModelArrays:
                 kwargs["mesh"] = PolyhedronMesh(**fields) if fields else None
             elif f_.name in g:
                 kwargs[f_.name] = g[f_.name][()]
+            elif f_.default is None:  # an optional array (face_joint: 3D faces naming joint materials)
+                kwargs[f_.name] = None
             else:
                 raise ResultsFileError(f"{path}: the stored model lacks field {f_.name!r} (written by another "
                                        "srdda version?); pass the model to resume(..., model=...)")
