@@ -13,6 +13,19 @@ from .model import Model, ModelError
 __all__ = ["add_cut_blocks", "add_cut_polyhedra"]
 
 
+def _fixed_flags(fixed: Sequence[bool] | np.ndarray | None, n_blocks: int) -> np.ndarray:
+    """One checked fixed flag per cut block (none given: all free)."""
+    flags = np.zeros(n_blocks, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
+    if flags.shape != (n_blocks,):
+        raise ModelError(f"fixed needs one flag per block ({n_blocks}), got {flags.shape}")
+    return flags
+
+
+def _joint_names(types: np.ndarray, joints: Mapping[int, str | None]) -> list[str | None]:
+    """The joint material named for each edge's or face's joint type (None: by the block materials)."""
+    return [None if t == NO_JOINT else joints.get(int(t)) for t in types]
+
+
 def add_cut_blocks(model: Model, cut: BlockCut, materials: Mapping[int, str],
                    joints: Mapping[int, str | None] | None = None,
                    fixed: Sequence[bool] | np.ndarray | None = None, prefix: str = "block") -> list[int]:
@@ -27,13 +40,11 @@ def add_cut_blocks(model: Model, cut: BlockCut, materials: Mapping[int, str],
     missing = sorted(set(np.unique(cut.block_material).tolist()) - set(materials))
     if missing:
         raise ModelError(f"cut blocks use material label(s) {missing} with no entry in materials")
-    fixed_arr = np.zeros(cut.n_blocks, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
-    if fixed_arr.shape != (cut.n_blocks,):
-        raise ModelError(f"fixed needs one flag per block ({cut.n_blocks}), got {fixed_arr.shape}")
+    fixed_arr = _fixed_flags(fixed, cut.n_blocks)
     out = []
     for b in range(cut.n_blocks):
         verts, types = cut.block(b)
-        edge_joints = [None if t == NO_JOINT else joints.get(int(t)) for t in types]
+        edge_joints = _joint_names(types, joints)
         out.append(model.add_block(verts, materials[int(cut.block_material[b])], name=f"{prefix} {b}",
                                    fixed=bool(fixed_arr[b]),
                                    edge_joints=edge_joints if any(j is not None for j in edge_joints) else None))
@@ -57,13 +68,11 @@ def add_cut_polyhedra(model: Model, cut: PolyhedralCut, materials: str | Mapping
     missing = sorted(set(np.unique(cut.block_part).tolist()) - set(by_part))
     if missing:
         raise ModelError(f"cut blocks come from domain part(s) {missing} with no entry in materials")
-    fixed_arr = np.zeros(cut.n_blocks, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
-    if fixed_arr.shape != (cut.n_blocks,):
-        raise ModelError(f"fixed needs one flag per block ({cut.n_blocks}), got {fixed_arr.shape}")
+    fixed_arr = _fixed_flags(fixed, cut.n_blocks)
     joints = {} if joints is None else dict(joints)
     face_joints = None
     if joints:
-        named = [joints.get(int(t)) if t != NO_JOINT else None for t in cut.face_joint]
+        named = _joint_names(cut.face_joint, joints)
         face_joints = [named[cut.face_first[b]:cut.face_first[b + 1]] for b in range(cut.n_blocks)]
     return model.add_polyhedra(cut.blocks(), [by_part[int(p)] for p in cut.block_part],
                                [f"{prefix} {b}" for b in range(cut.n_blocks)], fixed_arr.tolist(), face_joints)

@@ -642,14 +642,15 @@ class Model:
         for (a, b), name in self.joint_map.items():
             ia, ib = mat_names.index(a), mat_names.index(b)
             by_mats[ia, ib] = by_mats[ib, ia] = joint_names.index(name) + 1
-        edge_joint = np.concatenate([
-            np.full(len(b.vertices), -1) if b.edge_joints is None
-            else np.array([-1 if j is None else joint_names.index(j) + 1 for j in b.edge_joints])
-            for b in self.blocks]).astype(np.int64)
-        face_joint = None if mesh is None else np.concatenate([
-            np.full(len(b.faces), -1) if b.face_joints is None
-            else np.array([-1 if j is None else joint_names.index(j) + 1 for j in b.face_joints])
-            for b in self.blocks]).astype(np.int64)
+        def joint_rows(named: tuple[str | None, ...] | None, n: int) -> np.ndarray:
+            """Rows of joint_properties named per edge or face, -1 where the block materials choose."""
+            return np.full(n, -1) if named is None else np.array([-1 if j is None else joint_names.index(j) + 1
+                                                                   for j in named])
+
+        edge_joint = np.concatenate([joint_rows(b.edge_joints, len(b.vertices)) for b in self.blocks]
+                                    ).astype(np.int64)
+        face_joint = None if mesh is None else np.concatenate(
+            [joint_rows(b.face_joints, len(b.faces)) for b in self.blocks]).astype(np.int64)
         vertices = np.concatenate([b.vertices for b in self.blocks])
         if bt is PLANE and not self.allow_overlap:
             self._check_overlaps(vertices, block_ptr)

@@ -84,14 +84,16 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
             continue
         assert outcome.state is not None
         before, state = state, replace(outcome.state, dt_next=dt)
-        energy = energies(stepper.terms, arrays, state)
-        created = watch.check(energy, arrays, before, state) if watch is not None else None
-        if created is not None:
-            warnings.warn(created, EnergyWarning, stacklevel=2)
         stopped = stop is not None and stop(state)
-        if stopped or state.step % settings.record_every == 0 or state.step == last_step or (
-                end_time is not None and _reached(state.time, end_time, settings.dt)):
-            record(outcome.solves, energy)
+        recorded = stopped or state.step % settings.record_every == 0 or state.step == last_step or (
+            end_time is not None and _reached(state.time, end_time, settings.dt))
+        if watch is not None or recorded:  # the ledger every step only where it is watched
+            energy = energies(stepper.terms, arrays, state)
+            created = watch.check(energy, arrays, before, state) if watch is not None else None
+            if created is not None:
+                warnings.warn(created, EnergyWarning, stacklevel=2)
+            if recorded:
+                record(outcome.solves, energy)
         if progress is not None:
             progress(state.step)
         if stopped:

@@ -32,7 +32,7 @@ goes to the ledger's ``dissipated_friction``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -40,11 +40,11 @@ import numpy as np
 from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
 from ..geometry.polyhedron import PolyhedronMesh
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays, ModelError
-from ..term import LEDGER, StepContext, StepCut, Term
+from ..term import LEDGER, StepContext
 from .openclose import LOCKED, OPEN, SLIDING
 from .polyhedra_broadphase import block_boxes_3d, candidate_pairs_3d
 from .polyhedra_narrowphase import EDGE_EDGE, FOUND_FIELDS, VERTEX_FACE, detect_polyhedra_contacts
-from .term import ContactParameters, pair_keys
+from .term import ContactParameters, ContactTerm, pair_keys
 from .transfer import match_previous
 
 if TYPE_CHECKING:
@@ -596,51 +596,9 @@ class SolidContactModel:
                                 area)
 
 
-class SolidContactTerm(Term):
-    """Contacts between polyhedra as a step term: the 2D ContactTerm's step control, and friction in the ledger."""
-
-    energy_kind = "contact"
-    cuts_step = True
-
-    def __init__(self, model: SolidContactModel, max_iterations: int, max_displacement: float,
-                 dt_max: float) -> None:
-        self.model = model
-        self.max_iterations = max_iterations
-        self.max_displacement = max_displacement  # g2·w0
-        self.dt_max = dt_max
-        self.step: SolidContactStep | None = None
-
-    def begin(self, ctx: StepContext) -> None:
-        self.step = self.model.prepare(ctx.state.vertices, ctx.state.contacts, ctx.state.step == 0)
-
-    @property
-    def at_points(self) -> bool:
-        return self.step is not None
-
-    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
-        if self.step is not None:
-            self.step.add_to(system, ctx)
-
-    def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
-        return self.step is None or self.step.converged(dd, ctx)
-
-    def pending(self) -> str:
-        return "open-close did not converge"
-
-    def review(self, ctx: StepContext, new: State) -> StepCut | float | None:
-        """Cut a step whose vertices moved more than g2·w0 or penetrated too deep; else grow Δt (as in 2D)."""
-        touching = self.model.can_touch[ctx.arrays.vertex_block]
-        moved = float(np.max(np.linalg.norm(new.vertices[touching] - ctx.state.vertices[touching], axis=1),
-                             initial=0.0))
-        if moved > self.max_displacement:
-            return StepCut(f"a vertex moved {moved:.3g} m > g2·w0 = {self.max_displacement:.3g} m",
-                           min(0.9, 0.9 * self.max_displacement / moved))
-        step = self.step
-        if step is not None and step.max_penetration > step.params.max_penetration:
-            return StepCut(f"penetration {step.max_penetration:.3g} m > {step.params.max_penetration:.3g} m "
-                           "(raise the contact penalty)", 0.0)
-        growth = 1.5 if moved == 0 else min(1.5, 0.9 * self.max_displacement / moved)
-        return min(self.dt_max, ctx.dt * growth)
+class SolidContactTerm(ContactTerm):
+    """Contacts between polyhedra as a step term: the 2D term's begin, open-close, step control and commit
+    (:class:`srdda.contact.term.ContactTerm`, over a :class:`SolidContactModel`); friction in the ledger."""
 
     def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
         """Friction dissipation of the step: minus the work of the friction forces over the slip."""
@@ -650,8 +608,3 @@ class SolidContactTerm(Term):
         out[LEDGER.index("dissipated_friction")] = -self.step.friction_work()
         return out
 
-    def commit(self, new: State) -> State:
-        return replace(new, contacts=self.step.commit() if self.step is not None else None)
-
-    def energy(self, arrays: ModelArrays, state: State) -> float:
-        return state.contacts.energy if state.contacts is not None else 0.0

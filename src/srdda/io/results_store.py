@@ -6,8 +6,9 @@ to resizable, chunked datasets, writes a checkpoint of the full
 :class:`~srdda.simulation.State` and flushes the file. A run killed at any
 moment (even by SIGKILL) leaves a file holding every step up to the last flush,
 and :func:`resume` continues it from the last checkpoint, appending to the same
-file. :func:`read_results` reads a file back into a :class:`StoredResult` with
-the same histories as an in-memory :class:`~srdda.simulation.Result`.
+file. :func:`read_results` (:mod:`srdda.io.results_reader`, re-exported here)
+reads a file back into a :class:`StoredResult` with the same histories as an
+in-memory :class:`~srdda.simulation.Result`.
 
 Layout (see docs/results.md)::
 
@@ -53,7 +54,7 @@ import platform
 import shutil
 import socket
 import sys
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
@@ -61,23 +62,21 @@ from typing import IO
 import h5py
 import numpy as np
 
-from ..constraints.data import links_from_flat, links_to_flat
-from ..geometry.polyhedron import PolyhedronMesh
-from ..model import Load, Model, ModelArrays
+from ..constraints.data import links_to_flat
+from ..model import Model, ModelArrays
 from ..ledger import ENERGY_NAMES
 from ..results import Result, bolt_histories, measured_points
 from ..settings import RunSettings
 from ..simulation import run
 from ..state import State, initial_state
-from .checkpoint import (append_checkpoint, checkpoint_count, commit_checkpoint, increasing_prefix,
-                         read_checkpoint, truncate_checkpoints)
+from .checkpoint import append_checkpoint, checkpoint_count, commit_checkpoint, truncate_checkpoints
+from .results_reader import (FORMAT, FORMAT_VERSION, ResultsFileError, StoredResult, contact_records,
+                             group_length, load_checkpoint, model_arrays_from_file, open_results, read_results)
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state", "ResultsStore", "ResultsFileError",
            "ResultsWriteError", "OutputInUseError", "OutputExistsError", "StoredResult", "read_results", "resume",
            "load_checkpoint", "model_arrays_from_file"]
 
-FORMAT = "srdda-results"
-FORMAT_VERSION = 1
 
 ContactProvider = Callable[[ModelArrays, State], Mapping[str, np.ndarray] | None]
 """Hook for contact output: per-contact arrays (first axis = contact) of one state, or None.
@@ -117,10 +116,6 @@ def contacts_from_state(arrays: ModelArrays, state: State) -> dict[str, np.ndarr
         if isinstance(value, np.ndarray) and value.shape[:1] == vertex.shape and f.name not in out:
             out[f.name] = value
     return out
-
-
-class ResultsFileError(ValueError):
-    """The file is not an srdda results file or lacks what is asked of it."""
 
 
 class ResultsWriteError(OSError):
@@ -291,17 +286,6 @@ def _append(group: h5py.Group, name: str, rows: np.ndarray, chunk_rows: int) -> 
     ds[n:] = rows
 
 
-def _group_length(group: h5py.Group) -> int:
-    """Rows every dataset of ``group`` holds: the shortest extent, cut where ``step`` stops increasing."""
-    n = min((ds.shape[0] for ds in group.values() if isinstance(ds, h5py.Dataset)), default=0)
-    return increasing_prefix(group["step"][:n]) if "step" in group else n
-
-
-def _contact_records(c: h5py.Group) -> int:
-    """Complete contact records: each needs its step and its closing offset."""
-    return increasing_prefix(c["step"][: min(len(c["step"]), len(c["offsets"]) - 1)])
-
-
 def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None) -> None:
     """Every array field of ``arrays`` as a dataset; names, loads and the model text as attributes."""
     for f in dataclasses.fields(arrays):
@@ -319,55 +303,6 @@ def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None)
     group.attrs["loads"] = json.dumps([ld.to_json() for ld in arrays.loads])
     if model_text is not None:
         group.attrs["model_text"] = model_text
-
-
-def model_arrays_from_file(path: str | Path) -> ModelArrays:
-    """The :class:`ModelArrays` stored in a results file (callable loads cannot be stored)."""
-    with _open_read(path) as f:
-        g = f["model"]
-        loads_json = json.loads(g.attrs["loads"])
-        if any(ld is None for ld in loads_json):
-            raise ResultsFileError(f"{path}: the model has a point load given as a Python function, which a file "
-                                   "cannot hold; pass the model to resume(..., model=...)")
-        kwargs: dict[str, object] = {}
-        for f_ in dataclasses.fields(ModelArrays):
-            if f_.name == "block_names":
-                kwargs[f_.name] = tuple(json.loads(g.attrs["block_names"]))
-            elif f_.name == "loads":
-                kwargs[f_.name] = tuple(Load.from_json(ld) for ld in loads_json)
-            elif f_.name == "links" and "links" in g.attrs:
-                try:
-                    kwargs["links"] = links_from_flat({k[6:]: g[k][()] for k in g if k.startswith("links.")},
-                                                      json.loads(g.attrs["links"]))
-                except ValueError as exc:
-                    raise ResultsFileError(f"{path}: {exc}; pass the model to resume(..., model=...)") from None
-            elif f_.name == "mesh":
-                fields = {k[5:]: g[k][()] for k in g if k.startswith("mesh.")}
-                kwargs["mesh"] = PolyhedronMesh(**fields) if fields else None
-            elif f_.name in g:
-                kwargs[f_.name] = g[f_.name][()]
-            elif f_.default is None:  # an optional array (face_joint: 3D faces naming joint materials)
-                kwargs[f_.name] = None
-            else:
-                raise ResultsFileError(f"{path}: the stored model lacks field {f_.name!r} (written by another "
-                                       "srdda version?); pass the model to resume(..., model=...)")
-        return ModelArrays(**kwargs)
-
-
-def _open_read(path: str | Path) -> h5py.File:
-    try:
-        f = h5py.File(path, "r")
-    except OSError as exc:
-        raise ResultsFileError(f"{path}: cannot open as an HDF5 results file ({exc})") from exc
-    if f.attrs.get("format") != FORMAT:
-        f.close()
-        raise ResultsFileError(f"{path}: not an srdda results file (no format={FORMAT!r} attribute)")
-    missing = [g for g in ("settings", "model", "history", "checkpoint", "contacts") if g not in f]
-    if missing or "last_step" not in f.attrs:
-        f.close()
-        raise ResultsFileError(f"{path}: an incomplete results file (no {', '.join(missing) or 'last_step'}: the "
-                               "run was stopped while it created the file); run the model again")
-    return f
 
 
 @dataclass
@@ -691,112 +626,17 @@ def _truncate_to_checkpoint(f: h5py.File) -> int:
         return -1
     step = int(cp["step"][n_cp - 1])
     hist = f["history"]
-    n = _group_length(hist)
+    n = group_length(hist)
     keep = int(np.searchsorted(hist["step"][:n], step, side="right"))
     for ds in hist.values():
         ds.resize(keep, axis=0)
     c = f["contacts"]
     if "step" in c:
-        k = int(np.searchsorted(c["step"][:_contact_records(c)], step, side="right"))
+        k = int(np.searchsorted(c["step"][:contact_records(c)], step, side="right"))
         rows = int(c["offsets"][k])
         for name, ds in c.items():
             ds.resize({"step": k, "offsets": k + 1}.get(name, rows), axis=0)
     return step
-
-
-# -- reading ----------------------------------------------------------------------
-@dataclass
-class StoredResult:
-    """The histories of a results file (rows = recorded steps), like :class:`~srdda.simulation.Result`."""
-
-    path: str
-    block_names: tuple[str, ...]
-    method: str
-    status: str
-    settings: RunSettings
-    histories: dict[str, np.ndarray]
-    energy_names: tuple[str, ...]
-    block_ptr: np.ndarray
-    block_material: np.ndarray
-    block_fixed: np.ndarray
-    initial_vertices: np.ndarray
-    contacts: dict[str, np.ndarray]
-    model_text: str | None
-    versions: dict[str, str]
-    bolt_names: tuple[str, ...] = ()
-
-    @property
-    def mesh(self) -> PolyhedronMesh | None:
-        """The faces of 3D blocks, read from the file (None for a 2D run)."""
-        with _open_read(self.path) as f:
-            fields = {k[5:]: f["model"][k][()] for k in f["model"] if k.startswith("mesh.")}
-        return PolyhedronMesh(**fields) if fields else None
-
-    def array(self, name: str) -> np.ndarray:
-        """A history as one array (first axis = recorded step); ``energy`` has columns ``energy_names``."""
-        if name not in self.histories:
-            raise KeyError(f"no history {name!r}; the file has {sorted(self.histories)}")
-        return self.histories[name]
-
-    def __getattr__(self, name: str) -> np.ndarray:
-        hist = self.__dict__.get("histories", {})
-        if name in hist:
-            return hist[name]
-        raise AttributeError(name)
-
-    @property
-    def completed(self) -> bool:
-        return self.status == "completed"
-
-    def contacts_at(self, index: int) -> dict[str, np.ndarray]:
-        """The contact arrays of the ``index``-th contact record."""
-        off = self.contacts["offsets"]
-        return {k: v[off[index]:off[index + 1]] for k, v in self.contacts.items() if k not in ("offsets", "step")}
-
-
-def read_results(path: str | Path, names: Sequence[str] | None = None) -> StoredResult:
-    """Read every flushed step of a results file (also of a run that was killed).
-
-    ``names`` reads only those histories (e.g. leave out the vertices of a large model).
-    """
-    with _open_read(path) as f:
-        hist = f["history"]
-        n = _group_length(hist)
-        histories = {k: ds[:n] for k, ds in hist.items() if names is None or k in names}
-        g = f["model"]
-        c = f["contacts"]
-        contacts: dict[str, np.ndarray] = {}
-        if "step" in c:
-            k = _contact_records(c)
-            rows = int(c["offsets"][k])
-            contacts = {name: ds[:k] if name == "step" else ds[:k + 1] if name == "offsets" else ds[:rows]
-                        for name, ds in c.items()}
-        energy_names = tuple(json.loads(hist["energy"].attrs["names"])) if "energy" in hist else ENERGY_NAMES
-        return StoredResult(
-            path=str(path), block_names=tuple(json.loads(g.attrs["block_names"])), method=str(f.attrs["method"]),
-            status=str(f.attrs["status"]), settings=RunSettings(**json.loads(f["settings"].attrs["json"])),
-            histories=histories, energy_names=energy_names, block_ptr=g["block_ptr"][()],
-            block_material=g["block_material"][()], block_fixed=g["block_fixed"][()],
-            initial_vertices=g["vertices"][()], contacts=contacts,
-            model_text=str(g.attrs["model_text"]) if "model_text" in g.attrs else None,
-            versions={k: str(v) for k, v in f["versions"].attrs.items()},
-            bolt_names=tuple(json.loads(g.attrs["links"]).get("bolt_names", ())) if "links" in g.attrs else ())
-
-
-def load_checkpoint(path: str | Path, arrays: ModelArrays) -> State:
-    """The :class:`State` of the last complete checkpoint of a results file."""
-    def moments(vertices: np.ndarray):
-        if vertices.shape != arrays.vertices.shape:
-            raise ResultsFileError(f"{path}: the checkpoint has {len(vertices)} vertices, the model "
-                                   f"{len(arrays.vertices)}")
-        return arrays.moments(vertices)
-
-    with _open_read(path) as f:
-        cp = f["checkpoint"]
-        n = checkpoint_count(cp)
-        if n == 0:
-            raise ResultsFileError(f"{path}: no checkpoint was flushed; nothing to resume from")
-        return read_checkpoint(cp, n - 1, moments)
 
 
 def _resume_arrays(path: str | Path) -> ModelArrays:
@@ -828,7 +668,7 @@ def resume(path: str | Path, model: Model | ModelArrays | None = None, flush_eve
     part, holding its first and last recorded steps (the file holds the whole run).
     """
     arrays = _resume_arrays(path) if model is None else (model.arrays() if isinstance(model, Model) else model)
-    with _open_read(path) as f:
+    with open_results(path) as f:
         settings = RunSettings(**json.loads(f["settings"].attrs["json"]))
         last_step = int(f.attrs["last_step"])
         stored_flush = int(f.attrs["flush_every"])
