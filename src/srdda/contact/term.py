@@ -166,13 +166,14 @@ class ContactStep:
                 | ((self.state != OPEN) & (state == OPEN) & (self.gap > band)))
         limit = 0 if self.iterations >= p.settle_after else p.freeze_after
         frozen = (self.flips >= limit) & (state != self.state) & ~safe
-        # a contact held SLIDING whose slip reversed would have its friction push the block the way it
-        # moves (creating energy): it keeps sliding with no friction, a force inside the friction cone
+        # a contact held SLIDING whose slip reversed had its friction push the block the way it
+        # moves (creating energy): it keeps sliding with no friction, a force inside the friction cone,
+        # and the step is solved once more so that the accepted solution never has that friction
         reversed_slip = frozen & (self.state == SLIDING) & (np.sign(self.shear) == -self.sign)
         state = np.where(frozen, self.state, state).astype(np.int8)
         sign = np.where(frozen & ~reversed_slip, self.sign, sign).astype(np.int8)
         sign = np.where(reversed_slip, 0, sign).astype(np.int8)
-        changed = np.where(frozen, False, changed)
+        changed = np.where(frozen, reversed_slip, changed)
         if self.iterations < p.settle_after:  # then friction forces are taken as they are
             changed = changed | unsettled
         self.flips += state != self.state
@@ -199,7 +200,12 @@ class ContactStep:
             slope = residual - prev_residual
             ok = sliding & (np.abs(slope) > 1e-12 * np.maximum(np.abs(residual), 1e-300)) & (used != prev_used)
             step = np.where(ok, residual * (used - prev_used) / np.where(ok, slope, 1.0), 0.0)
-            nxt = np.where(ok & (solved > 0), np.maximum(used - step, 0.0), nxt)
+            # safeguarded: taken only between N_used and N_solved, where the fixed point of a map with
+            # slope in (-1, 0] lies; else plain substitution (a far extrapolation would load friction
+            # past any N of the step)
+            secant = used - step
+            inside = (secant >= np.minimum(used, solved)) & (secant <= np.maximum(used, solved))
+            nxt = np.where(ok & inside & (solved > 0), secant, nxt)
         self._secant = (used.copy(), residual)
         return nxt
 
@@ -314,6 +320,9 @@ class ContactModel:
         state[kept] = previous.state[src]
         sign = np.zeros(len(found), dtype=np.int8)
         sign[kept] = previous.sign[src]
+        # one held sliding without friction (its slip reversed, see ContactStep.converged) locks
+        # again, unstretched: the slip reversal locks a contact (Shi 1988)
+        state[(state == SLIDING) & (sign == 0)] = LOCKED
         # a new, sliding or open contact starts its shear spring unstretched: the reference is the
         # projection of v on the edge's line, beyond the edge's end for a vertex-vertex contact
         # (clipped to the end, a new locked spring would start stretched by up to d0)
