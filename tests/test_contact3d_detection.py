@@ -185,3 +185,27 @@ def _faces(arr, b):
 def test_block_boxes_3d():
     arr = _arrays(box((0, 0, 0), (1, 2, 3)), box((5, 5, 5), (6, 6, 6)))
     np.testing.assert_array_equal(block_boxes_3d(arr.vertices, arr.block_ptr), [[0, 0, 0, 1, 2, 3], [5, 5, 5, 6, 6, 6]])
+
+
+def test_a_vertex_beside_a_rim_is_no_deep_penetration():
+    """A vertex hanging 0.05 m beyond a cube's rim and 0.1 m below its top, its edges reaching back over the top:
+    it is beside the cube, not in it (a freshly cut 3D slope had 21 such 'penetrations' of up to 12 cm, which
+    blew its first step apart). With d0 = 0.3 m and 0.125 m allowed depth, the band rule alone took it for a
+    contact with the top face at gap -0.1 m; outside every face plane but one by more than 1e-3 d0, it is not."""
+    from srdda.geometry.cutting3d import convex_hull_polyhedron
+    cube = box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    hanging = convex_hull_polyhedron(np.array([[1.05, 0.5, 0.9], [0.95, 0.3, 1.3], [0.95, 0.7, 1.3],
+                                               [1.2, 0.5, 1.5]]))
+    arrays = _arrays(cube, hanging, fixed=(0,))
+    cm = SolidContactModel(arrays, ContactParameters(1e9, 4e8, 0.3, np.radians(3.0), 0.125))
+    found, surface = cm.detect(arrays.vertices)
+    geometry = contact_geometry_3d(arrays.vertices, cm.mesh, cm.topology, surface, found)
+    assert not np.any(geometry.gap < -1e-3 * 0.3), (found, geometry.gap)  # nothing deeper than the slack
+    # the same tetrahedron lowered onto the top face (its lowest vertex 0.01 m into it, above the face) is one
+    lowered = convex_hull_polyhedron(np.array([[0.9, 0.5, 0.99], [0.8, 0.3, 1.3], [0.8, 0.7, 1.3], [1.05, 0.5, 1.5]]))
+    arrays = _arrays(cube, lowered, fixed=(0,))
+    cm = SolidContactModel(arrays, ContactParameters(1e9, 4e8, 0.3, np.radians(3.0), 0.125))
+    found, surface = cm.detect(arrays.vertices)
+    geometry = contact_geometry_3d(arrays.vertices, cm.mesh, cm.topology, surface, found)
+    deep = (found[:, 0] == VERTEX_FACE) & np.isclose(geometry.gap, -0.01)
+    assert deep.sum() == 1, (found, geometry.gap)

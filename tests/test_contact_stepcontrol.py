@@ -57,6 +57,8 @@ def test_open_close_cap_cuts_and_then_stops_with_a_message():
     res = srdda.run(m, settings)
     assert res.status.startswith("stopped")
     assert "open-close did not converge" in res.status and "minimum" in res.status
+    # the message says what flipped: the two locked corners of block 1 on the base (block 0) turning to sliding
+    assert "(2 contacts still changing state, between blocks block 0/block 1 (2 contacts))" in res.status, res.status
     assert res.final_state.step == 0  # nothing accepted, nothing recorded but the start
     ok = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=10))
     assert ok.completed

@@ -70,7 +70,7 @@ def _docstrings(module: types.ModuleType):
         if inspect.isclass(obj) or inspect.isfunction(obj):
             yield f"{module.__name__}.{name}", obj.__doc__ or "", obj if inspect.isclass(obj) else None
         if inspect.isclass(obj):
-            for attr, member in vars(obj).items():
+            for attr, member in list(vars(obj).items()):  # _has may add a class its __annotations__
                 doc = getattr(member, "__doc__", None) if isinstance(member, (types.FunctionType, property,
                                                                              staticmethod, classmethod)) else None
                 if doc:

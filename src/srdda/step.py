@@ -64,7 +64,7 @@ def contact_parameters(arrays: ModelArrays, settings: RunSettings, w0: float) ->
     return ContactParameters(kn, settings.shear_ratio * kn, d0, np.radians(settings.contact_angle_tolerance),
                              settings.penetration_fraction * d0, settings.friction_tolerance,
                              settings.open_close_freeze_after, settings.open_close_settle_after,
-                             settings.open_close_tolerance * w0)
+                             settings.open_close_tolerance * w0, settings.open_close_force_tolerance)
 
 
 def time_step_advice(arrays: ModelArrays, settings: RunSettings) -> str | None:

@@ -34,12 +34,18 @@ Two additions make impacts converge (docs/contacts.md):
   solve (Shi); the step is iterated until that force has settled to
   ``friction_tolerance`` (relative) as well (for at most a few solves in
   large systems, see :mod:`srdda.contact.term`).
+
+Negligible changes (``open_close_force_tolerance`` ε, :func:`negligible_force`):
+a contact that closes with a normal force below ε·F, or a locked one whose
+shear spring exceeds its strength by less, takes its new state without another
+solve; F is the pair's force scale (docs/contacts.md, "Negligible state
+changes").
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["OPEN", "SLIDING", "LOCKED", "next_states"]
+__all__ = ["OPEN", "SLIDING", "LOCKED", "next_states", "negligible_force", "negligible_changes"]
 
 OPEN, SLIDING, LOCKED = 0, 1, 2
 
@@ -81,3 +87,26 @@ def next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.
         np.abs(np.maximum(normal, 0.0) - friction_normal) > friction_tolerance * np.maximum(normal, 0.0)) & (
         np.abs(np.maximum(normal, 0.0) - friction_normal) * tan_phi > ks * tolerance)
     return new_state, new_sign, changed, unsettled
+
+
+def negligible_force(block_mass: np.ndarray, gravity: np.ndarray, block_a: np.ndarray, block_b: np.ndarray,
+                     normal: np.ndarray, tolerance: float) -> np.ndarray:
+    """Per contact, the force below which a state change needs no solve: ``tolerance`` × the pair's scale.
+
+    A block's force scale is the larger of its weight and its largest contact
+    normal force ``normal`` (N, compression positive); a pair takes the
+    smaller of its two blocks' (a light block beside heavy ones keeps a fine
+    tolerance; a fixed base never sets it).
+    """
+    scale = block_mass * float(np.linalg.norm(gravity))
+    np.maximum.at(scale, block_a, normal)
+    np.maximum.at(scale, block_b, normal)
+    return tolerance * np.minimum(scale[block_a], scale[block_b])
+
+
+def negligible_changes(state: np.ndarray, new_state: np.ndarray, normal: np.ndarray, shear_force: np.ndarray,
+                       strength: np.ndarray, limit: np.ndarray) -> np.ndarray:
+    """Closings with a normal force, and slips with a spring force beyond the strength, at most ``limit``."""
+    closing = (state == OPEN) & (new_state != OPEN) & (normal <= limit)
+    slipping = (state == LOCKED) & (new_state == SLIDING) & (shear_force - strength <= limit)
+    return closing | slipping

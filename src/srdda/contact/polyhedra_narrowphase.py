@@ -43,7 +43,14 @@ Criteria (d0 the contact distance, all on the configuration at t):
 * plausibility of a penetrating V-F contact: no other face of b that v's
   cone fits is nearer to v than the contacted face's plane (the contacted
   face is v's shortest way out; a vertex beyond a thin block, or beside an
-  acute edge, is not a contact with the far face).
+  acute edge, is not a contact with the far face);
+* a contact penetrating a convex block deeper than ``_OUTSIDE`` × d0 must be
+  inside it: a vertex (or an E-E contact's closest point on either edge) in
+  front of any face plane of that block by more than ``_OUTSIDE`` × d0 is
+  beside the block, not in it, whatever its depth below the contacted face
+  (in a freshly cut 3D slope, vertices beside a block's rim were taken for
+  12 cm penetrations of its far face, docs/contacts-3d.md). Shallower
+  contacts (rounding at coplanar faces) keep the band rule above.
 
 Output rows [kind, feature of a, feature of b, block a, block b]: kind 0 V-F
 (vertex, face), kind 1 E-E (edge of a, edge of b), edges numbered as in
@@ -60,6 +67,7 @@ VERTEX_FACE = 0
 EDGE_EDGE = 1
 FOUND_FIELDS = 5  # [kind, feature a, feature b, block a, block b]
 _INSIDE = 1e-9  # a projection this close to a face's boundary (× d0) counts as inside
+_OUTSIDE = 1e-3  # a point this far in front of a convex block's face plane (× d0) is outside the block
 
 
 @njit(cache=True)
@@ -120,6 +128,17 @@ def _face_distance(X, face_ptr, face_vertex, face_normal, face_point, g, v):
 
 
 @njit(cache=True)
+def _height_over(block_face_ptr, face_normal, face_point, b, x, y, z):
+    """Largest signed distance of the point (x, y, z) to b's face planes: > 0 outside a convex b."""
+    worst = -np.inf
+    for g in range(block_face_ptr[b], block_face_ptr[b + 1]):
+        h = face_normal[g, 0] * (x - face_point[g, 0]) + face_normal[g, 1] * (y - face_point[g, 1]) \
+            + face_normal[g, 2] * (z - face_point[g, 2])
+        worst = max(worst, h)
+    return worst
+
+
+@njit(cache=True)
 def _push(buf, n, kind, fa, fb, a, b):
     if n == len(buf):
         bigger = np.empty((2 * len(buf), 5), dtype=np.int64)
@@ -153,7 +172,7 @@ def _in_normal_cone(mx, my, mz, e, edge_v0, edge_v1, edge_faces, face_normal, X,
 
 @njit(cache=True)
 def _vertex_face(X, a, b, block_ptr, block_face_ptr, face_ptr, face_vertex, face_normal, face_point,
-                 neighbour_ptr, neighbour, vertex_convex, boxes, d0, sin_tol, max_depth, buf, n):
+                 neighbour_ptr, neighbour, vertex_convex, block_convex, boxes, d0, sin_tol, max_depth, buf, n):
     """V-F contacts of a's vertices with b's faces (interior ones, else the entrance face of a band)."""
     inside_tol = _INSIDE * d0
     for v in range(block_ptr[a], block_ptr[a + 1]):
@@ -176,6 +195,9 @@ def _vertex_face(X, a, b, block_ptr, block_face_ptr, face_ptr, face_vertex, face
             out = _outside_distance(X, face_ptr, face_vertex, f, nx, ny, nz, x - d * nx, y - d * ny, z - d * nz)
             if out >= d0:
                 continue
+            if d < -_OUTSIDE * d0 and block_convex[b] and _height_over(block_face_ptr, face_normal, face_point, b,
+                                                                       x, y, z) > _OUTSIDE * d0:
+                continue  # v is beside b, not in it
             if d < 0.0:  # plausibility: the contacted face is v's shortest way out of b
                 slack = 1e-9 * d0
                 plausible = True
@@ -202,8 +224,8 @@ def _vertex_face(X, a, b, block_ptr, block_face_ptr, face_ptr, face_vertex, face
 
 
 @njit(cache=True)
-def _edge_edge(X, a, b, block_edge_ptr, edge_v0, edge_v1, edge_faces, edge_convex, face_normal, boxes, d0,
-               sin_tol, max_depth, buf, n):
+def _edge_edge(X, a, b, block_edge_ptr, edge_v0, edge_v1, edge_faces, edge_convex, block_face_ptr, face_normal,
+               face_point, block_convex, boxes, d0, sin_tol, max_depth, buf, n):
     """E-E contacts of the crossing convex edges of a and b (closest points inside both, normal in both cones)."""
     for ea in range(block_edge_ptr[a], block_edge_ptr[a + 1]):
         if not edge_convex[ea]:
@@ -249,6 +271,13 @@ def _edge_edge(X, a, b, block_edge_ptr, edge_v0, edge_v1, edge_faces, edge_conve
             d = mx * (rx + s * ux - t * wx) + my * (ry + s * uy - t * wy) + mz * (rz + s * uz - t * wz)
             if d >= d0 or d < -max_depth:
                 continue
+            if d < -_OUTSIDE * d0:  # a penetrating crossing lies inside both blocks (the convex ones checked)
+                if block_convex[b] and _height_over(block_face_ptr, face_normal, face_point, b, X[p, 0] + s * ux,
+                                                    X[p, 1] + s * uy, X[p, 2] + s * uz) > _OUTSIDE * d0:
+                    continue
+                if block_convex[a] and _height_over(block_face_ptr, face_normal, face_point, a, X[q, 0] + t * wx,
+                                                    X[q, 1] + t * wy, X[q, 2] + t * wz) > _OUTSIDE * d0:
+                    continue
             if not (_in_normal_cone(mx, my, mz, eb, edge_v0, edge_v1, edge_faces, face_normal, X, sin_tol)
                     and _in_normal_cone(-mx, -my, -mz, ea, edge_v0, edge_v1, edge_faces, face_normal, X, sin_tol)):
                 continue
@@ -265,6 +294,12 @@ def detect_polyhedra_contacts(X, pairs, boxes, block_ptr, block_face_ptr, face_p
 
     V-F both ways round, E-E once per pair (module doc).
     """
+    block_convex = np.ones(len(block_ptr) - 1, dtype=np.bool_)
+    for b in range(len(block_convex)):
+        for e in range(block_edge_ptr[b], block_edge_ptr[b + 1]):
+            if not edge_convex[e]:
+                block_convex[b] = False
+                break
     buf = np.empty((max(16, 8 * len(pairs)), 5), dtype=np.int64)
     n = 0
     for k in range(len(pairs)):
@@ -272,8 +307,9 @@ def detect_polyhedra_contacts(X, pairs, boxes, block_ptr, block_face_ptr, face_p
             a = pairs[k, side]
             b = pairs[k, 1 - side]
             buf, n = _vertex_face(X, a, b, block_ptr, block_face_ptr, face_ptr, face_vertex, face_normal,
-                                  face_point, neighbour_ptr, neighbour, vertex_convex, boxes, d0, sin_tol,
-                                  max_depth, buf, n)
+                                  face_point, neighbour_ptr, neighbour, vertex_convex, block_convex, boxes, d0,
+                                  sin_tol, max_depth, buf, n)
         buf, n = _edge_edge(X, pairs[k, 0], pairs[k, 1], block_edge_ptr, edge_v0, edge_v1, edge_faces, edge_convex,
-                            face_normal, boxes, d0, sin_tol, max_depth, buf, n)
+                            block_face_ptr, face_normal, face_point, block_convex, boxes, d0, sin_tol, max_depth,
+                            buf, n)
     return buf[:n].copy()

@@ -41,7 +41,7 @@ from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scat
 from ..geometry.polyhedron import PolyhedronMesh
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays, ModelError
 from ..term import LEDGER, StepContext
-from .openclose import LOCKED, OPEN, SLIDING
+from .openclose import LOCKED, OPEN, SLIDING, negligible_changes, negligible_force
 from .polyhedra_broadphase import block_boxes_3d, candidate_pairs_3d
 from .polyhedra_narrowphase import EDGE_EDGE, FOUND_FIELDS, VERTEX_FACE, detect_polyhedra_contacts
 from .term import ContactParameters, ContactTerm, pair_keys
@@ -352,6 +352,7 @@ class SolidContactStep:
         self.trial_direction = direction.copy()  # the friction direction the next step starts from
         self.friction_normal = normal_force.copy()
         self.applied = np.zeros((len(state), _FRAME))  # friction force of the last solve in the frame (N)
+        self.unsettled_pairs = np.zeros((0, 2), dtype=np.int64)  # block pairs of the last solve's changes
         self._shapes: tuple[np.ndarray, ...] | None = None
 
     def __len__(self) -> int:
@@ -416,7 +417,8 @@ class SolidContactStep:
                                                                     self.direction) < 0)
         state = np.where(frozen, self.state, state).astype(np.int8)
         direction = np.where((frozen & ~turned_back)[:, None], self.direction, direction)
-        changed = np.where(frozen, False, changed) | (turned_back & ~self.frictionless)
+        changed = (np.where(frozen, False, changed) & ~self._negligible(state, ctx.arrays)) \
+            | (turned_back & ~self.frictionless)
         self.frictionless |= turned_back
         direction = np.where(self.frictionless[:, None], 0.0, direction)
         if self.iterations < p.settle_after:
@@ -441,7 +443,20 @@ class SolidContactStep:
         self.friction_normal = np.where(stable, self.normal_force, self.friction_normal)
         self.state, self.direction = state, direction
         self.iterations += 1
+        self.unsettled_pairs = np.column_stack([a[changed], b[changed]])
         return not bool(np.any(changed))
+
+    def _negligible(self, new_state: np.ndarray, arrays: ModelArrays) -> np.ndarray:
+        """Closings and slips below :func:`negligible_force`, as in 2D (``ContactStep._negligible``)."""
+        p = self.params
+        if p.force_tolerance == 0.0:
+            return np.zeros(len(new_state), dtype=bool)
+        g = self.geometry
+        normal = np.maximum(-p.normal_stiffness * self.gap, 0.0)
+        limit = negligible_force(arrays.block_mass, arrays.gravity, g.block_a, g.block_b, normal, p.force_tolerance)
+        return negligible_changes(self.state, new_state, normal,
+                                  p.shear_stiffness * np.linalg.norm(self.shear, axis=1),
+                                  normal * self.tan_phi + self.cohesion_force, limit)
 
     def friction_work(self) -> float:
         """Work (J) of friction over the step that is dissipated; ≤ 0 when friction opposes the slip.

@@ -22,7 +22,7 @@ from ..term import LEDGER, StepContext, StepCut, Term
 from .broadphase import block_boxes, candidate_pairs
 from ..geometry.polygon import previous_vertex_index
 from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts
-from .openclose import LOCKED, OPEN, SLIDING, next_states
+from .openclose import LOCKED, OPEN, SLIDING, negligible_changes, negligible_force, next_states
 from .springs import ContactGeometry, bond_length, contact_geometry
 from .transfer import contact_keys, match_previous
 
@@ -45,6 +45,7 @@ class ContactParameters:
     freeze_after: int = 2  # state changes of one contact in a step after which its state is kept
     settle_after: int = 8  # solves after which no contact reopens or relocks, friction is not re-iterated
     tolerance: float = 0.0  # m, Shi's f0·w0: the open and reverse-slip bands, the settled friction displacement
+    force_tolerance: float = 0.0  # relative to the blocks' largest contact force: a change below needs no solve
 
 
 @dataclass(frozen=True)
@@ -105,6 +106,9 @@ class ContactStep:
         self.friction_normal = normal_force.copy()  # N used for the friction of sliding contacts
         self._secant: tuple[np.ndarray, np.ndarray] | None = None  # previous (N used, residual)
         self._shapes: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._solved_state = state
+        self._force_limit: np.ndarray | float = 0.0  # N, per contact: a state change below needs no solve
+        self.unsettled_pairs = np.zeros((0, 2), dtype=np.int64)  # block pairs of the last solve's changes
 
     def __len__(self) -> int:
         return len(self.state)
@@ -116,6 +120,7 @@ class ContactStep:
         tq = ctx.shape_at(b, g.foot)
         tr = ctx.shape_at(b, g.point_on_edge(self.reference))
         self._shapes = (tv, tq, tr)
+        self._solved_state = self.state.copy()  # the states of this solve's forces (for work)
         closed = self.state != OPEN
         if np.any(closed):
             locked = (self.state[closed] == LOCKED).astype(float)
@@ -173,7 +178,7 @@ class ContactStep:
         state = np.where(frozen, self.state, state).astype(np.int8)
         sign = np.where(frozen & ~reversed_slip, self.sign, sign).astype(np.int8)
         sign = np.where(reversed_slip, 0, sign).astype(np.int8)
-        changed = np.where(frozen, reversed_slip, changed)
+        changed = np.where(frozen, reversed_slip, changed) & ~self._negligible(state, ctx.arrays)
         if self.iterations < p.settle_after:  # then friction forces are taken as they are
             changed = changed | unsettled
         self.flips += state != self.state
@@ -181,7 +186,22 @@ class ContactStep:
         self.friction_normal = self._next_friction_normal(state)
         self.state, self.sign = state, sign
         self.iterations += 1
+        self.unsettled_pairs = np.column_stack([self.geometry.vertex_block[changed], self.geometry.edge_block[changed]])
         return not bool(np.any(changed))
+
+    def _negligible(self, new_state: np.ndarray, arrays: ModelArrays) -> np.ndarray:
+        """Closings and slips below :func:`negligible_force`: they take their new state without another
+        solve and act from the next solve or step. They bring no work into the step: a late closing stores
+        at most ½(limit)²/k_n, a late slip only loses its spring's energy."""
+        p = self.params
+        if p.force_tolerance == 0.0:
+            return np.zeros(len(new_state), dtype=bool)
+        g = self.geometry
+        normal = np.maximum(-p.normal_stiffness * self.gap, 0.0)
+        self._force_limit = negligible_force(arrays.block_mass, arrays.gravity, g.vertex_block, g.edge_block,
+                                             normal, p.force_tolerance)
+        return negligible_changes(self.state, new_state, normal, p.shear_stiffness * np.abs(self.shear),
+                                  normal * self.tan_phi + self.cohesion_force, self._force_limit)
 
     def _next_friction_normal(self, new_state: np.ndarray) -> np.ndarray:
         """N for the next solve's friction: a per-contact secant step on N_used -> N_solved.
@@ -231,8 +251,10 @@ class ContactStep:
         return float(max(pen.max(), 0.0)) if len(pen) else 0.0
 
     def _held_in_band(self) -> np.ndarray:
-        """Closed contacts in tension beyond their strength: held closed only by the open-close band."""
-        return (self.state != OPEN) & (self.params.normal_stiffness * self.gap > self.tension_force)
+        """Closed contacts in tension beyond their strength (and the negligible force, see
+        :meth:`_negligible`): held closed only by the open-close band."""
+        return (self.state != OPEN) & (self.params.normal_stiffness * self.gap > self.tension_force
+                                       + self._force_limit)
 
     def stored_energy(self) -> float:
         """J per m the contacts keep after the step: ½k_n g² of the closed contacts + ½k_s s² of the locked
@@ -262,11 +284,14 @@ class ContactStep:
                          - np.einsum("nki,ni->nk", tq, dd[g.edge_block]))
         friction = float(np.sum(self.friction * slip))
         p = self.params
-        closed, locked = self.state != OPEN, self.state == LOCKED
+        closed, locked = self._solved_state != OPEN, self._solved_state == LOCKED
         dg, ds = self.gap - g.gap, self.shear - self.shear0
         springs = -p.normal_stiffness * float(np.sum(((g.gap + c_p * dg) * dg)[closed])) \
             - p.shear_stiffness * float(np.sum(((self.shear0 + c_p * ds) * ds)[locked]))
         return friction, springs
+
+
+UNSETTLED_SHOWN = 3  # block pairs named in the message of a step cut by the open-close
 
 
 def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:
@@ -373,7 +398,17 @@ class ContactTerm(Term):
         return self.step is None or self.step.converged(dd, ctx)
 
     def pending(self) -> str:
-        return "open-close did not converge"
+        """The open-close message of a cut step: how many contacts still changed, and between which blocks."""
+        if self.step is None:
+            return "open-close did not converge"
+        pairs, arrays = self.step.unsettled_pairs, self.model.arrays
+        keys, counts = np.unique(pair_keys(pairs, arrays.n_blocks), return_counts=True)
+        top = np.argsort(-counts, kind="stable")[:UNSETTLED_SHOWN]
+        shown = ", ".join(f"{arrays.block_names[k // arrays.n_blocks]}/{arrays.block_names[k % arrays.n_blocks]}"
+                          + (f" ({n} contacts)" if n > 1 else "") for k, n in zip(keys[top], counts[top]))
+        more = len(keys) - len(top)
+        return (f"open-close did not converge ({len(pairs)} contacts still changing state, between blocks "
+                f"{shown}{f' and {more} more pairs' if more > 0 else ''})")
 
     def review(self, ctx: StepContext, new: State) -> StepCut | float | None:
         """Cut a step whose vertices moved more than g2·w0 or that penetrated too deep; else grow Δt.
