@@ -71,3 +71,10 @@ def test_unreadable_and_malformed_files(tmp_path):
     bad.write_text("[run\ndt = 1")
     with pytest.raises(ModelFileError, match="not valid TOML"):
         load_model(bad)
+
+
+def test_an_ensemble_file_given_as_a_model_says_so():
+    # a new user's first try: `srdda run` on an ensemble file gave six schema errors; now one sentence
+    ensemble = Path(__file__).parents[1] / "examples" / "ensembles" / "rockfall-2d.toml"
+    with pytest.raises(ModelFileError, match=r"ensemble file .* `srdda ensemble`"):
+        load_model(ensemble)

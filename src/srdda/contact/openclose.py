@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["OPEN", "SLIDING", "LOCKED", "next_states", "negligible_force", "negligible_changes"]
+__all__ = ["OPEN", "SLIDING", "LOCKED", "next_states", "negligible_force", "negligible_changes", "never_held"]
 
 OPEN, SLIDING, LOCKED = 0, 1, 2
 
@@ -110,3 +110,20 @@ def negligible_changes(state: np.ndarray, new_state: np.ndarray, normal: np.ndar
     closing = (state == OPEN) & (new_state != OPEN) & (normal <= limit)
     slipping = (state == LOCKED) & (new_state == SLIDING) & (shear_force - strength <= limit)
     return closing | slipping
+
+
+def never_held(state: np.ndarray, new_state: np.ndarray, gap: np.ndarray, band: float, flips: np.ndarray,
+               freeze_after: int) -> np.ndarray:
+    """State changes the iteration's freezing never holds back: they keep forces bounded and store no energy.
+
+    A locked contact that slips (a locked spring past its strength would load
+    further step after step), an open one that penetrates by more than ``band``
+    and a closed one open by more than ``band`` (not a rounding at a zero gap).
+    Opening is held too once a contact has changed state 2 × ``freeze_after``
+    times in the step: it cycles open -> locked -> sliding -> open, each change
+    safe by itself; held closed in tension for the step, its spring only takes
+    energy out (the contact is committed open, its energy dropped).
+    """
+    cycling = flips >= 2 * freeze_after
+    return (((state == LOCKED) & (new_state == SLIDING)) | ((state == OPEN) & (gap < -band))
+            | ((state != OPEN) & (new_state == OPEN) & (gap > band) & ~cycling))

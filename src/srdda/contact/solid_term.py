@@ -41,7 +41,7 @@ from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scat
 from ..geometry.polyhedron import PolyhedronMesh
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays, ModelError
 from ..term import LEDGER, StepContext
-from .openclose import LOCKED, OPEN, SLIDING, negligible_changes, negligible_force
+from .openclose import LOCKED, OPEN, SLIDING, negligible_changes, negligible_force, never_held
 from .polyhedra_broadphase import block_boxes_3d, candidate_pairs_3d
 from .polyhedra_narrowphase import EDGE_EDGE, FOUND_FIELDS, VERTEX_FACE, detect_polyhedra_contacts
 from .term import ContactParameters, ContactTerm, pair_keys
@@ -403,11 +403,9 @@ class SolidContactStep:
             self.cohesion_force, self.tension_force, self.closed_this_step, self.friction_normal,
             p.friction_tolerance)
         # as in 2D (srdda.contact.term): a contact that changed state ``freeze_after`` times keeps it,
-        # except the safe changes (close a clearly penetrating contact, open a clearly open one,
-        # let a locked one slip); after ``settle_after`` solves every contact is held so
+        # except the changes of ``never_held``; after ``settle_after`` solves every contact is held so
         band = 1e-6 * p.distance
-        safe = (((self.state == LOCKED) & (state == SLIDING)) | ((self.state == OPEN) & (self.gap < -band))
-                | ((self.state != OPEN) & (state == OPEN) & (self.gap > band)))
+        safe = never_held(self.state, state, self.gap, band, self.flips, p.freeze_after)
         limit = 0 if self.iterations >= p.settle_after else p.freeze_after
         frozen = (self.flips >= limit) & (state != self.state) & ~safe
         # a contact held SLIDING whose slip turned back had its friction push the block the way it

@@ -22,7 +22,7 @@ from ..term import LEDGER, StepContext, StepCut, Term
 from .broadphase import block_boxes, candidate_pairs
 from ..geometry.polygon import previous_vertex_index
 from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts
-from .openclose import LOCKED, OPEN, SLIDING, negligible_changes, negligible_force, next_states
+from .openclose import LOCKED, OPEN, SLIDING, negligible_changes, negligible_force, never_held, next_states
 from .springs import ContactGeometry, bond_length, contact_geometry
 from .transfer import contact_keys, match_previous
 
@@ -160,15 +160,10 @@ class ContactStep:
                                            p.tolerance)
         # a contact that has already changed state ``freeze_after`` times in this step keeps its state,
         # so that the iteration ends (it may carry a little tension for one step; the next step
-        # starts from the actual gap). Closing a clearly penetrating contact, opening a clearly
-        # open one and letting a locked one slip are never held back: they keep forces bounded
-        # and store no spurious energy.
-        # (never frozen LOCKED against a slip: a locked spring past its strength would keep
-        # loading from step to step)
-        # After ``settle_after`` solves every contact is held so, to settle cascades in large systems.
+        # starts from the actual gap), except the changes of ``never_held``. After ``settle_after``
+        # solves every contact is held so, to settle cascades in large systems.
         band = 1e-6 * p.distance  # clearly open or penetrating, not by rounding at a zero gap
-        safe = (((self.state == LOCKED) & (state == SLIDING)) | ((self.state == OPEN) & (self.gap < -band))
-                | ((self.state != OPEN) & (state == OPEN) & (self.gap > band)))
+        safe = never_held(self.state, state, self.gap, band, self.flips, p.freeze_after)
         limit = 0 if self.iterations >= p.settle_after else p.freeze_after
         frozen = (self.flips >= limit) & (state != self.state) & ~safe
         # a contact held SLIDING whose slip reversed had its friction push the block the way it

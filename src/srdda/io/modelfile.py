@@ -81,6 +81,9 @@ def model_from_dict(data: dict[str, Any], source: str = "model", base_dir: str |
     ``base_dir``: the folder that relative file names (earthquake records) are
     relative to (default: the current directory).
     """
+    if isinstance(data, dict) and "runs" in data and "model" in data and "blocks" not in data:
+        raise ModelFileError(f"{source}: this is an ensemble file (it names a base model and a number of runs), "
+                             "not a model file: run it with `srdda ensemble` (docs/ensembles.md)")
     try:
         spec = ModelFile.model_validate(data)
     except ValidationError as exc:
