@@ -19,12 +19,13 @@ functions of the engine with timers; nothing is patched in the parent):
   displacement or penetration check), counted by a wrapper around
   ``Stepper.step``;
 * ``share_*``: the part of the run's wall time spent (exclusively, nested timed
-  calls subtracted) in contact detection (``ContactModel.prepare``), assembly
-  (``Stepper.assemble`` and ``base_system``: every term's ``add_to``, and
-  ``BlockSystem`` to sparse/dense), the linear solve (the solver's ``solve``
-  minus the assembly it calls) and the open-close bookkeeping
-  (``ContactStep.converged``/``commit``); ``share_other`` is the rest (the
-  kinematic update, recording).
+  calls subtracted) in contact detection (``ContactModel.prepare``, in 3D
+  ``SolidContactModel.prepare``), assembly (``Stepper.assemble`` and
+  ``base_system``: every term's ``add_to``, and ``BlockSystem`` to
+  sparse/dense), the linear solve (the solver's ``solve`` minus the assembly
+  it calls) and the open-close bookkeeping (``ContactStep.converged``/``commit``,
+  in 3D ``SolidContactStep``'s); ``share_other`` is the rest (the kinematic
+  update, recording).
 """
 from __future__ import annotations
 
@@ -42,12 +43,13 @@ import numpy as np
 
 from .. import simulation
 from ..assembly.system import BlockSystem
+from ..contact.solid_term import SolidContactModel, SolidContactStep
 from ..contact.term import ContactModel, ContactStep
 from ..model import Model
 from ..settings import RunSettings
 from ..step import Stepper
 from ..solvers import DEFAULT_TOLERANCE
-from .models import brick_wall, jointed_slope
+from .models import brick_wall, english_bond_wall, jointed_slope, jointed_slope_3d
 
 __all__ = ["BenchCase", "CASES", "QUICK", "REQUIRED_KEYS", "run_cases", "format_table"]
 
@@ -73,6 +75,8 @@ CASES = {c.name: c for c in (
     BenchCase("slope_c", 2, lambda: jointed_slope("c"), 200, 20),
     BenchCase("wall_10k", 2, lambda: brick_wall(100, 100), 5, 1),
     BenchCase("wall_100k", 2, lambda: brick_wall(316, 316), 3, 1),
+    BenchCase("slope3d_1k", 3, jointed_slope_3d, 10, 2),
+    BenchCase("wall3d_10k", 3, lambda: english_bond_wall(50, 100), 3, 1),
 )}
 QUICK = ("slope_a", "slope_b")
 
@@ -129,12 +133,12 @@ class Probe:
                 probe.sim_time = outcome.state.time
             return outcome
 
-        prepare = ContactModel.prepare
-
-        def counted_prepare(model: Any, *args: Any) -> Any:
-            term = prepare(model, *args)
-            probe.contacts.append(0 if term is None else len(term))
-            return term
+        def counted(prepare: Callable[..., Any]) -> Callable[..., Any]:
+            def counted_prepare(model: Any, *args: Any) -> Any:
+                term = prepare(model, *args)
+                probe.contacts.append(0 if term is None else len(term))
+                return term
+            return counted_prepare
 
         get_solver = simulation.get_solver
 
@@ -142,14 +146,16 @@ class Probe:
             return _TimedSolver(get_solver(name, tolerance), probe)
 
         Stepper.step = counted_step  # type: ignore[method-assign]
-        ContactModel.prepare = self.timed("detection", counted_prepare)  # type: ignore[method-assign]
+        for model in (ContactModel, SolidContactModel):
+            model.prepare = self.timed("detection", counted(model.prepare))  # type: ignore[method-assign]
         simulation.get_solver = timed_solver  # type: ignore[assignment]
         Stepper.assemble = self.timed("assembly", Stepper.assemble)  # type: ignore[method-assign]
         Stepper.base_system = self.timed("assembly", Stepper.base_system)  # type: ignore[method-assign]
         for name in ("to_bsr", "to_csr", "to_dense", "saddle_csr", "saddle_dense"):
             setattr(BlockSystem, name, self.timed("assembly", getattr(BlockSystem, name)))
-        ContactStep.converged = self.timed("open_close", ContactStep.converged)  # type: ignore[method-assign]
-        ContactStep.commit = self.timed("open_close", ContactStep.commit)  # type: ignore[method-assign]
+        for contacts in (ContactStep, SolidContactStep):
+            contacts.converged = self.timed("open_close", contacts.converged)  # type: ignore[method-assign]
+            contacts.commit = self.timed("open_close", contacts.commit)  # type: ignore[method-assign]
 
 
 class _TimedSolver:
@@ -185,16 +191,16 @@ def peak_memory_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
 
 
-def _warm_up() -> None:
-    """Compile the numba kernels (contact detection) on a tiny wall, outside the timing."""
-    model, settings = brick_wall(2, 2)
+def _warm_up(dim: int) -> None:
+    """Compile the numba kernels (contact detection) on a tiny wall of the model's dimension, outside the timing."""
+    model, settings = brick_wall(2, 2) if dim == 2 else english_bond_wall(1, 2)
     simulation.run(model, replace(settings, n_steps=2))
 
 
 def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout: float) -> dict[str, Any]:
     """Build and run one model in this process; the row of ``srdda bench --json``."""
     start = time.perf_counter()
-    _warm_up()
+    _warm_up(case.dim)
     t0 = time.perf_counter()
     model, settings = case.build()
     arrays = model.arrays()
