@@ -130,9 +130,11 @@ def slope_3d_cut(spec: Slope3DSpec = SLOPE_3D) -> PolyhedralCut:
     x, z = _SLOPE_PROFILE.T
     corners = np.column_stack([np.tile(x, 2), np.repeat([0.0, spec.width], len(x)), np.tile(z, 2)])
     domain = convex_hull_polyhedron(corners, "slope")
-    sets = [JointSet3D(dip=min(theta, 180.0 - theta), dip_direction=270.0 if theta <= 90.0 else 90.0, spacing=s,
-                       joint_type=2, origin=(_set_origin(theta)[0], 0.0, _set_origin(theta)[1]))
-            for theta, s in ((25.0, spacing.gentle), (100.0, spacing.steep))]
+    sets = []
+    for theta, s in ((25.0, spacing.gentle), (100.0, spacing.steep)):
+        x0, z0 = _set_origin(theta)
+        sets.append(JointSet3D(dip=min(theta, 180.0 - theta), dip_direction=270.0 if theta <= 90.0 else 90.0,
+                               spacing=s, joint_type=2, origin=(x0, 0.0, z0)))
     sets.append(JointSet3D(dip=90.0, dip_direction=0.0, spacing=spec.cross_spacing, joint_type=2))
     return cut_polyhedra(domain, joint_planes(corners, sets, seed=None), boundary_type=1)
 
@@ -154,7 +156,7 @@ def jointed_slope_3d(spec: Slope3DSpec = SLOPE_3D) -> tuple[Model, RunSettings]:
     model.add_material("base", rock)
     (outline_phi, *_), (set_phi, *_) = _SLOPE_JOINTS
     model.add_joint_material("joint sets", JointMaterial(set_phi), between=[("rock", "rock")])
-    model.add_joint_material("base", JointMaterial(outline_phi), between=[("rock", "base"), ("base", "base")])
+    model.add_joint_material("base", JointMaterial(outline_phi), between=[("rock", "base")])
     (x0, z0), (x1, z1) = _BASE_SLAB
     model.add_polyhedron(*box((x0, 0.0, z0), (x1, spec.width, z1), "base"), "base", name="base", fixed=True)
     add_cut_polyhedra(model, cut, "rock")
