@@ -127,8 +127,7 @@ def slope_3d_cut(spec: Slope3DSpec = SLOPE_3D) -> PolyhedralCut:
     if not (spec.width > 0 and spec.cross_spacing > 0):
         raise ValueError(f"a 3D slope needs width > 0 and cross_spacing > 0, got {spec.width}, {spec.cross_spacing}")
     spacing = SLOPES[spec.slope]
-    x, z = _SLOPE_PROFILE.T
-    corners = np.column_stack([np.tile(x, 2), np.repeat([0.0, spec.width], len(x)), np.tile(z, 2)])
+    corners = np.array([[x, y, z] for y in (0.0, spec.width) for x, z in _SLOPE_PROFILE])  # the profile's prism
     domain = convex_hull_polyhedron(corners, "slope")
     sets = []
     for theta, s in ((25.0, spacing.gentle), (100.0, spacing.steep)):
@@ -253,12 +252,12 @@ def english_bond_outlines(nx: int, courses: int, spec: BrickWallSpec = BRICK) ->
     length, w, h = spec.length, spec.width, spec.height
     if length != 2.0 * w:
         raise ValueError(f"English bond needs bricks twice as long as wide, got {length} x {w} m")
-    ends = np.arange(nx + 1) * length
-    stretch_lo = np.column_stack([np.tile(ends[:-1], 2), np.repeat([0.0, w], nx), np.zeros(2 * nx)])
-    stretch_hi = np.column_stack([np.tile(ends[1:], 2), np.repeat([w, length], nx), np.full(2 * nx, h)])
-    x = np.concatenate([[0.0], 0.5 * w + w * np.arange(2 * nx), [nx * length]])
-    header_lo = np.column_stack([x[:-1], np.zeros(2 * nx + 1), np.zeros(2 * nx + 1)])
-    header_hi = np.column_stack([x[1:], np.full(2 * nx + 1, length), np.full(2 * nx + 1, h)])
+    sx, sy = (a.ravel() for a in np.meshgrid(np.arange(nx) * length, [0.0, w]))  # leaf by leaf
+    stretch_lo = np.column_stack([sx, sy, np.zeros_like(sx)])
+    stretch_hi = stretch_lo + np.array([length, w, h])
+    x = np.concatenate([[0.0], 0.5 * w + w * np.arange(2 * nx), [nx * length]])  # header joints
+    header_lo = np.column_stack([x[:-1], np.zeros_like(x[:-1]), np.zeros_like(x[:-1])])
+    header_hi = np.column_stack([x[1:], np.full_like(x[1:], length), np.full_like(x[1:], h)])
     rise = np.array([0.0, 0.0, h])
     lo = [(header_lo if k % 2 else stretch_lo) + k * rise for k in range(courses)]
     hi = [(header_hi if k % 2 else stretch_hi) + k * rise for k in range(courses)]
