@@ -5,6 +5,7 @@ No timing is asserted: the figures depend on the machine and its load.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -206,7 +207,7 @@ def test_standard_3d_wall_has_its_block_count() -> None:
 
 @pytest.mark.parametrize("build", [lambda: english_bond_wall(3, 4),
                                    lambda: jointed_slope_3d(Slope3DSpec(slope="a", width=4.0))])
-def test_3d_models_start_without_overlap(build) -> None:
+def test_3d_models_start_without_overlap(build: Callable[[], tuple[Model, RunSettings]]) -> None:
     model, settings = build()
     gap, distance = _initial_gaps(model, settings)
     assert len(gap) > 0
