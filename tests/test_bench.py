@@ -5,16 +5,24 @@ No timing is asserted: the figures depend on the machine and its load.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
 import shapely
 from click.testing import CliRunner
 
-from srdda.bench.models import BRICK, SLOPES, brick_wall, jointed_slope, slope_input
-from srdda.bench.runner import REQUIRED_KEYS
+from srdda.bench.models import (BRICK, SLOPE_3D, SLOPES, Slope3DSpec, brick_wall, english_bond_outlines,
+                                english_bond_wall, jointed_slope, jointed_slope_3d, slope_3d_cut, slope_input)
+from srdda.bench.runner import CASES, QUICK, REQUIRED_KEYS, BenchCase, measure
 from srdda.cli import main
-from srdda.step import model_half_height
+from srdda.contact.solid_term import SolidContactModel, contact_geometry_3d
+from srdda.contact.term import ContactModel, ContactStep
+from srdda.geometry.jointsets3d import plane_normal
+from srdda.model import Model
+from srdda.settings import RunSettings
+from srdda.step import Stepper, contact_parameters, model_half_height
 
 # Block counts of the three slopes: every closed loop of the joint lines (Shi's DC), as the DDAML
 # converter cuts the benchmark files slope_{a,b,c}.geo (measured once, docs/performance.md).
@@ -108,3 +116,134 @@ def test_bench_time_limit_gives_a_row_not_a_hang() -> None:
 def test_bench_unknown_model_is_one_message() -> None:
     out = CliRunner().invoke(main, ["bench", "--model", "slope_z"])
     assert out.exit_code == 2 and "unknown model(s) slope_z" in out.output
+
+
+# -- 3D models -----------------------------------------------------------------------------------------
+
+# Blocks of the 3D slope: 1,020 cut blocks (counted once, docs/performance.md) and the base slab.
+SLOPE_3D_BLOCKS = 1021
+
+
+def _initial_gaps(model: Model, settings: RunSettings) -> tuple[np.ndarray, float]:
+    """Gaps (m) of every contact detected at t = 0 (the run's own detection) and the detection distance d0."""
+    arrays = model.arrays()
+    params = contact_parameters(arrays, settings, model_half_height(arrays.vertices))
+    detector = SolidContactModel(arrays, params)
+    found, surface = detector.detect(arrays.vertices)
+    geom = contact_geometry_3d(arrays.vertices, detector.mesh, detector.topology, surface, found)
+    return geom.gap, params.distance
+
+
+def test_slope_3d_blocks_volume_and_settings() -> None:
+    model, settings = jointed_slope_3d()
+    arrays = model.arrays()
+    assert arrays.n_blocks == SLOPE_3D_BLOCKS
+    assert arrays.block_fixed.tolist() == [True] + [False] * (SLOPE_3D_BLOCKS - 1)
+    volume = arrays.moments(arrays.vertices).volume
+    # the base slab 60 x 5 m and the rock above it, the 2D profile's trapezoid (45 + 25) / 2 x 20 m, over
+    # the 12 m width; the cut blocks tile it: 1e-9 relative covers the rounding of the cut's coordinates
+    assert volume[0] == pytest.approx(60.0 * 5.0 * SLOPE_3D.width, rel=1e-12)
+    assert volume[1:].sum() == pytest.approx(0.5 * (45.0 + 25.0) * 20.0 * SLOPE_3D.width, rel=1e-9)
+    assert volume.min() > 0.0
+    np.testing.assert_allclose(arrays.block_mass, 2700.0 * volume, rtol=1e-12)  # ρ V, rounding only
+    two_d = slope_input(SLOPE_3D.slope).run_parameters()
+    assert (settings.method, settings.dt, settings.max_displacement_ratio, settings.contact_penalty) == (
+        two_d["method"], two_d["dt"], two_d["max_displacement_ratio"], two_d["contact_penalty"])
+    assert arrays.gravity[2] == pytest.approx(-26487.0 / 2700.0) and arrays.gravity[:2].tolist() == [0.0, 0.0]
+
+
+def test_slope_3d_joint_faces_lie_on_the_three_sets() -> None:
+    spec = Slope3DSpec(slope="a", width=4.0, cross_spacing=2.0)  # small: the same builder, fewer blocks
+    cut = slope_3d_cut(spec)
+    assert len(cut.skipped) == 0 and len(cut.rejected) == 0
+    block_of_face = np.repeat(np.arange(cut.n_blocks), np.diff(cut.face_first))
+    corners = cut.vertices[cut.block_ptr[block_of_face[np.repeat(np.arange(len(cut.face_joint)),
+                                                                  np.diff(cut.face_ptr))]] + cut.face_vertex]
+    following = np.roll(corners, -1, axis=0)
+    following[cut.face_ptr[1:] - 1] = corners[cut.face_ptr[:-1]]
+    newell = np.add.reduceat(np.cross(corners, following), cut.face_ptr[:-1], axis=0)
+    normal = newell / np.linalg.norm(newell, axis=1)[:, None]
+    sets = plane_normal(np.array([25.0, 80.0, 90.0]), np.array([270.0, 90.0, 0.0]))
+    on_joint = cut.face_joint == 2
+    # every joint face is parallel to one set's planes (1e-9: rounding of the cut points), each set is there
+    parallel = np.abs(normal[on_joint] @ sets.T) > 1.0 - 1e-9
+    assert np.all(parallel.sum(axis=1) == 1) and np.all(parallel.any(axis=0))
+    # the cross set's planes are y = 2 m apart inside the 4 m width: one plane, y = 2 m
+    cross = np.flatnonzero(on_joint)[parallel[:, 2]]
+    np.testing.assert_allclose(corners[cut.face_ptr[cross], 1], 2.0, atol=1e-9)
+    assert set(np.unique(cut.face_joint).tolist()) == {1, 2}  # domain faces carry the outline's type 1
+
+
+@pytest.mark.parametrize(("nx", "courses"), [(1, 1), (2, 3), (3, 4)])
+def test_english_bond_wall_counts_volume_and_bond(nx: int, courses: int) -> None:
+    model, settings = english_bond_wall(nx, courses)
+    arrays = model.arrays()
+    headers = courses // 2
+    assert arrays.n_blocks == 1 + 2 * nx * (courses - headers) + (2 * nx + 1) * headers
+    volume = arrays.moments(arrays.vertices).volume
+    # exact: every coordinate is a multiple of 0.25 m, so the moment sums are exact in binary
+    assert volume[0] == (nx + 2.0) * 3.0 * 1.0  # base (nx + 2) x (1 + 2) x 1 m
+    assert volume[1:].sum() == nx * 1.0 * 1.0 * 0.5 * courses  # the wall nx x 1 m x courses x 0.5 m, filled
+    lo, hi = english_bond_outlines(nx, courses)
+    overlap = np.prod(np.clip(np.minimum(hi[:, None], hi[None]) - np.maximum(lo[:, None], lo[None]), 0.0, None),
+                      axis=2)
+    np.fill_diagonal(overlap, 0.0)
+    assert overlap.max() == 0.0  # bricks that fill the wall's volume without overlapping tile it
+    assert lo[:, 2].min() == 0.0 and arrays.block_fixed.tolist() == [True] + [False] * (arrays.n_blocks - 1)
+    # the bond: no vertical joint of a header course lies above or below one of a stretcher course
+    course = np.round(lo[:, 2] / BRICK.height).astype(int)
+    joints = [set(np.concatenate([lo[course % 2 == k, 0], hi[course % 2 == k, 0]]).tolist()) - {0.0, float(nx)}
+              for k in (0, 1)]
+    assert not joints[0] & joints[1]
+    assert settings.max_displacement_ratio * model_half_height(arrays.vertices) == pytest.approx(
+        BRICK.step_displacement, rel=1e-12)
+    assert (settings.dt, settings.contact_penalty, settings.method) == (1e-3, 5e10, "dda0")
+
+
+def test_standard_3d_wall_has_its_block_count() -> None:
+    lo, _ = english_bond_outlines(50, 100)
+    assert len(lo) + 1 == 10051  # 50 stretcher courses of 100 bricks, 50 header courses of 101, the base
+
+
+@pytest.mark.parametrize("build", [lambda: english_bond_wall(3, 4),
+                                   lambda: jointed_slope_3d(Slope3DSpec(slope="a", width=4.0))])
+def test_3d_models_start_without_overlap(build: Callable[[], tuple[Model, RunSettings]]) -> None:
+    model, settings = build()
+    gap, distance = _initial_gaps(model, settings)
+    assert len(gap) > 0
+    # touching blocks: gaps 0 up to the rounding of the coordinates (1e-9 m), none beyond the search distance
+    assert gap.min() >= -1e-9 and gap.max() <= distance
+
+
+def test_bad_3d_model_parameters_are_named() -> None:
+    with pytest.raises(ValueError, match="courses >= 1"):
+        english_bond_wall(2, 0)
+    with pytest.raises(ValueError, match="unknown slope 'z'"):
+        jointed_slope_3d(Slope3DSpec(slope="z"))
+    with pytest.raises(ValueError, match="width > 0"):
+        jointed_slope_3d(Slope3DSpec(width=0.0))
+
+
+def test_3d_models_are_listed_and_quick_stays_2d() -> None:
+    assert {"slope3d_1k": 3, "wall3d_10k": 3}.items() <= {n: c.dim for n, c in CASES.items()}.items()
+    assert all(CASES[name].dim == 2 for name in QUICK)
+    help_text = CliRunner().invoke(main, ["bench", "--help"]).output
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
+    for name in CASES:
+        assert name in " ".join(help_text.split()) and f"`{name}`" in doc
+
+
+def test_tiny_3d_wall_runs_through_the_runner() -> None:
+    engine = (Stepper.step, ContactModel.prepare, SolidContactModel.prepare, ContactStep.converged)
+    case = BenchCase("wall3d_tiny", 3, lambda: english_bond_wall(3, 2), steps=2, quick_steps=1)
+    row = measure(case, 2, "dda0", None, timeout=120.0)
+    assert set(REQUIRED_KEYS) <= set(row) and row["status"] == "completed", row["note"]
+    assert (row["dim"], row["blocks"], row["steps"], row["dt"]) == (3, 1 + 6 + 7, 2, 1e-3)
+    assert row["attempts"] == row["steps"] + row["rejected_steps"]
+    assert row["contacts_per_attempt"] > 0  # the 3D detection was counted
+    # the 3D contact classes are timed: detection and open-close took some time
+    assert row["share_detection"] > 0.0 and row["share_open_close"] > 0.0
+    shares = [row[f"share_{p}"] for p in ("detection", "assembly", "solve", "open_close", "other")]
+    assert min(shares) >= 0.0 and sum(shares) == pytest.approx(1.0, abs=1e-9)  # rounding of the sum
+    # the engine is as it was: the probe restored what it wrapped
+    assert (Stepper.step, ContactModel.prepare, SolidContactModel.prepare, ContactStep.converged) == engine

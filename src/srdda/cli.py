@@ -324,7 +324,9 @@ def verify_command(cases: tuple[str, ...], as_json: bool, quick: bool) -> None:
 @main.command("bench")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document {\"rows\": [...]} instead of a table.")
 @click.option("--quick", is_flag=True, help="The small models only (slope a, b), few steps: under a minute.")
-@click.option("--model", "models", multiple=True, help="Run this standard model (repeatable; default: all).")
+@click.option("--model", "models", multiple=True,
+              help="Run this standard model (repeatable; default: all): slope_a, slope_b, slope_c, wall_10k, "
+                   "wall_100k (2D), slope3d_1k, wall3d_10k (3D).")
 @click.option("--steps", type=click.IntRange(min=0), default=None, help="Steps per model (default: the model's).")
 @click.option("--dt", type=click.FloatRange(min=0, min_open=True), default=None,
               help="Time step (s) for every model (default: the model's).")

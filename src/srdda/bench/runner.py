@@ -6,7 +6,8 @@ model's numba compilation, caches or leaks do not bias the next. The child
 prints one JSON row; the parent collects the rows and prints them.
 
 What a row measures, without changing the engine (the child wraps a few
-functions of the engine with timers; nothing is patched in the parent):
+functions of the engine with timers while the model runs, :class:`Probe`;
+nothing is patched in the parent):
 
 * ``steps``: accepted steps within the step count and the wall-time limit;
   ``steps_per_s`` = accepted steps / wall time of ``srdda.run`` (model
@@ -19,12 +20,13 @@ functions of the engine with timers; nothing is patched in the parent):
   displacement or penetration check), counted by a wrapper around
   ``Stepper.step``;
 * ``share_*``: the part of the run's wall time spent (exclusively, nested timed
-  calls subtracted) in contact detection (``ContactModel.prepare``), assembly
-  (``Stepper.assemble`` and ``base_system``: every term's ``add_to``, and
-  ``BlockSystem`` to sparse/dense), the linear solve (the solver's ``solve``
-  minus the assembly it calls) and the open-close bookkeeping
-  (``ContactStep.converged``/``commit``); ``share_other`` is the rest (the
-  kinematic update, recording).
+  calls subtracted) in contact detection (``ContactModel.prepare``, in 3D
+  ``SolidContactModel.prepare``), assembly (``Stepper.assemble`` and
+  ``base_system``: every term's ``add_to``, and ``BlockSystem`` to
+  sparse/dense), the linear solve (the solver's ``solve`` minus the assembly
+  it calls) and the open-close bookkeeping (``ContactStep.converged``/``commit``,
+  in 3D ``SolidContactStep``'s); ``share_other`` is the rest (the kinematic
+  update, recording).
 """
 from __future__ import annotations
 
@@ -34,7 +36,8 @@ import resource
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -42,12 +45,13 @@ import numpy as np
 
 from .. import simulation
 from ..assembly.system import BlockSystem
+from ..contact.solid_term import SolidContactModel, SolidContactStep
 from ..contact.term import ContactModel, ContactStep
 from ..model import Model
 from ..settings import RunSettings
 from ..step import Stepper
 from ..solvers import DEFAULT_TOLERANCE
-from .models import brick_wall, jointed_slope
+from .models import brick_wall, english_bond_wall, jointed_slope, jointed_slope_3d
 
 __all__ = ["BenchCase", "CASES", "QUICK", "REQUIRED_KEYS", "run_cases", "format_table"]
 
@@ -73,6 +77,8 @@ CASES = {c.name: c for c in (
     BenchCase("slope_c", 2, lambda: jointed_slope("c"), 200, 20),
     BenchCase("wall_10k", 2, lambda: brick_wall(100, 100), 5, 1),
     BenchCase("wall_100k", 2, lambda: brick_wall(316, 316), 3, 1),
+    BenchCase("slope3d_1k", 3, jointed_slope_3d, 5, 1),
+    BenchCase("wall3d_10k", 3, lambda: english_bond_wall(50, 100), 3, 1),
 )}
 QUICK = ("slope_a", "slope_b")
 
@@ -82,7 +88,7 @@ class WallTimeLimit(Exception):
 
 
 class Probe:
-    """Timers and counters wrapped around engine functions, in the child process only."""
+    """Timers and counters wrapped around engine functions while :meth:`installed` is active."""
 
     def __init__(self, deadline: float) -> None:
         self.deadline = deadline
@@ -95,6 +101,7 @@ class Probe:
         self.sim_time = 0.0
         self.solves = 0
         self.contacts: list[int] = []
+        self._originals: list[tuple[Any, str, Any]] = []  # (class or module, name, what was there)
 
     def timed(self, phase: str, fn: Callable[..., Any]) -> Callable[..., Any]:
         """``fn`` with its exclusive wall time added to ``phase``."""
@@ -111,45 +118,65 @@ class Probe:
                     self._stack[-1][1] += elapsed
         return wrapper
 
-    def install(self) -> None:
-        """Wrap the engine's functions (class attributes and module globals of this process)."""
-        probe = self
-        step = Stepper.step
+    @contextmanager
+    def installed(self) -> Iterator[Probe]:
+        """The engine's functions wrapped (class attributes and module globals of this process), restored after."""
+        try:
+            self._install()
+            yield self
+        finally:
+            for owner, name, original in reversed(self._originals):
+                setattr(owner, name, original)
+            self._originals.clear()
 
-        def counted_step(stepper: Stepper, state: Any, dt: float) -> Any:
-            if time.perf_counter() > probe.deadline:
-                raise WallTimeLimit
-            probe.attempts += 1
-            outcome = step(stepper, state, dt)
-            if outcome.status == "cut":
-                probe.rejected += 1
-            elif outcome.status == "accepted":
-                probe.accepted_solves.append(outcome.solves)
-                probe.accepted_dt.append(outcome.state.time - state.time)
-                probe.sim_time = outcome.state.time
-            return outcome
+    def _wrap(self, owner: Any, name: str, wrapper: Callable[[Any], Any]) -> None:
+        original = getattr(owner, name)
+        self._originals.append((owner, name, original))
+        setattr(owner, name, wrapper(original))
 
-        prepare = ContactModel.prepare
+    def _install(self) -> None:
+        """Count step attempts, solves and contacts; time the phases (module doc)."""
+        def counted_steps(step: Callable[..., Any]) -> Callable[..., Any]:
+            def counted_step(stepper: Stepper, state: Any, dt: float) -> Any:
+                if time.perf_counter() > self.deadline:
+                    raise WallTimeLimit
+                self.attempts += 1
+                outcome = step(stepper, state, dt)
+                if outcome.status == "cut":
+                    self.rejected += 1
+                elif outcome.status == "accepted":
+                    self.accepted_solves.append(outcome.solves)
+                    self.accepted_dt.append(outcome.state.time - state.time)
+                    self.sim_time = outcome.state.time
+                return outcome
+            return counted_step
 
-        def counted_prepare(model: Any, *args: Any) -> Any:
-            term = prepare(model, *args)
-            probe.contacts.append(0 if term is None else len(term))
-            return term
+        def counted(prepare: Callable[..., Any]) -> Callable[..., Any]:
+            def counted_prepare(model: Any, *args: Any) -> Any:
+                term = prepare(model, *args)
+                self.contacts.append(0 if term is None else len(term))
+                return term
+            return counted_prepare
 
-        get_solver = simulation.get_solver
+        def timed_solvers(get_solver: Callable[..., Any]) -> Callable[..., Any]:
+            def timed_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE) -> Any:
+                return _TimedSolver(get_solver(name, tolerance), self)
+            return timed_solver
 
-        def timed_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE) -> Any:
-            return _TimedSolver(get_solver(name, tolerance), probe)
+        def timer(phase: str) -> Callable[[Any], Any]:
+            return lambda fn: self.timed(phase, fn)
 
-        Stepper.step = counted_step  # type: ignore[method-assign]
-        ContactModel.prepare = self.timed("detection", counted_prepare)  # type: ignore[method-assign]
-        simulation.get_solver = timed_solver  # type: ignore[assignment]
-        Stepper.assemble = self.timed("assembly", Stepper.assemble)  # type: ignore[method-assign]
-        Stepper.base_system = self.timed("assembly", Stepper.base_system)  # type: ignore[method-assign]
+        self._wrap(Stepper, "step", counted_steps)
+        for model in (ContactModel, SolidContactModel):
+            self._wrap(model, "prepare", lambda fn: self.timed("detection", counted(fn)))
+        self._wrap(simulation, "get_solver", timed_solvers)
+        for name in ("assemble", "base_system"):
+            self._wrap(Stepper, name, timer("assembly"))
         for name in ("to_bsr", "to_csr", "to_dense", "saddle_csr", "saddle_dense"):
-            setattr(BlockSystem, name, self.timed("assembly", getattr(BlockSystem, name)))
-        ContactStep.converged = self.timed("open_close", ContactStep.converged)  # type: ignore[method-assign]
-        ContactStep.commit = self.timed("open_close", ContactStep.commit)  # type: ignore[method-assign]
+            self._wrap(BlockSystem, name, timer("assembly"))
+        for contacts in (ContactStep, SolidContactStep):
+            for name in ("converged", "commit"):
+                self._wrap(contacts, name, timer("open_close"))
 
 
 class _TimedSolver:
@@ -185,16 +212,16 @@ def peak_memory_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
 
 
-def _warm_up() -> None:
-    """Compile the numba kernels (contact detection) on a tiny wall, outside the timing."""
-    model, settings = brick_wall(2, 2)
+def _warm_up(dim: int) -> None:
+    """Compile the numba kernels (contact detection) on a tiny wall of the model's dimension, outside the timing."""
+    model, settings = brick_wall(2, 2) if dim == 2 else english_bond_wall(1, 2)
     simulation.run(model, replace(settings, n_steps=2))
 
 
 def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout: float) -> dict[str, Any]:
     """Build and run one model in this process; the row of ``srdda bench --json``."""
     start = time.perf_counter()
-    _warm_up()
+    _warm_up(case.dim)
     t0 = time.perf_counter()
     model, settings = case.build()
     arrays = model.arrays()
@@ -202,16 +229,16 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
     settings = replace(settings, n_steps=steps, method=method, dt=settings.dt if dt is None else dt,
                        record_every=max(steps, 1))
     probe = Probe(deadline=start + timeout)
-    probe.install()
     note = ""
-    t0, cpu0 = time.perf_counter(), time.process_time()
-    try:
-        status = simulation.run(arrays, settings).status
-    except WallTimeLimit:
-        status = "time limit"
-        note = (f"wall-time limit {timeout:g} s reached after {len(probe.accepted_solves)} accepted steps "
-                f"and {probe.attempts} attempts")
-    wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    with probe.installed():
+        t0, cpu0 = time.perf_counter(), time.process_time()
+        try:
+            status = simulation.run(arrays, settings).status
+        except WallTimeLimit:
+            status = "time limit"
+            note = (f"wall-time limit {timeout:g} s reached after {len(probe.accepted_solves)} accepted steps "
+                    f"and {probe.attempts} attempts")
+        wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
     if status not in ("completed", "time limit"):
         note = status
     n = len(probe.accepted_solves)
