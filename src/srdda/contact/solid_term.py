@@ -352,7 +352,8 @@ class SolidContactStep:
         self.trial_direction = direction.copy()  # the friction direction the next step starts from
         self.friction_normal = normal_force.copy()
         self.applied = np.zeros((len(state), _FRAME))  # friction force of the last solve in the frame (N)
-        self.unsettled_pairs = np.zeros((0, 2), dtype=np.int64)  # block pairs of the last solve's changes
+        # block pairs of the last solve's state changes (for the message of a cut step)
+        self.unsettled_pairs = np.column_stack([geometry.block_a[:0], geometry.block_b[:0]])
         self._shapes: tuple[np.ndarray, ...] | None = None
 
     def __len__(self) -> int:

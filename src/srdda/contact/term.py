@@ -108,7 +108,8 @@ class ContactStep:
         self._shapes: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._solved_state = state
         self._force_limit: np.ndarray | float = 0.0  # N, per contact: a state change below needs no solve
-        self.unsettled_pairs = np.zeros((0, 2), dtype=np.int64)  # block pairs of the last solve's changes
+        # block pairs of the last solve's state changes (for the message of a cut step)
+        self.unsettled_pairs = np.column_stack([geometry.vertex_block[:0], geometry.edge_block[:0]])
 
     def __len__(self) -> int:
         return len(self.state)
