@@ -45,7 +45,7 @@ class ContactParameters:
     freeze_after: int = 2  # state changes of one contact in a step after which its state is kept
     settle_after: int = 8  # solves after which no contact reopens or relocks, friction is not re-iterated
     tolerance: float = 0.0  # m, Shi's f0·w0: the open and reverse-slip bands, the settled friction displacement
-    force_tolerance: float = 0.0  # relative to the blocks' largest contact force: a change below needs no solve
+    force_tolerance: float = 0.0  # × the pair's force scale (openclose.negligible_force): below, no further solve
 
 
 @dataclass(frozen=True)
@@ -182,7 +182,8 @@ class ContactStep:
         self.friction_normal = self._next_friction_normal(state)
         self.state, self.sign = state, sign
         self.iterations += 1
-        self.unsettled_pairs = np.column_stack([self.geometry.vertex_block[changed], self.geometry.edge_block[changed]])
+        g = self.geometry
+        self.unsettled_pairs = np.column_stack([g.vertex_block[changed], g.edge_block[changed]])
         return not bool(np.any(changed))
 
     def _negligible(self, new_state: np.ndarray, arrays: ModelArrays) -> np.ndarray:
