@@ -355,6 +355,7 @@ class SolidContactStep:
         # block pairs of the last solve's state changes (for the message of a cut step)
         self.unsettled_pairs = np.column_stack([geometry.block_a[:0], geometry.block_b[:0]])
         self._shapes: tuple[np.ndarray, ...] | None = None
+        self._shapes_theta: np.ndarray | None = None  # the rotation increment the shapes were made with
 
     def __len__(self) -> int:
         return len(self.state)
@@ -362,10 +363,11 @@ class SolidContactStep:
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         g = self.geometry
         a, b = g.block_a, g.block_b
-        shapes = (ctx.shape_at(a, g.point_a), ctx.shape_at(b, g.point_b), ctx.shape_at(a, self.shear_a),
-                  ctx.shape_at(b, self.shear_b))
-        self._shapes = shapes
-        ta, tb, tra, trb = shapes
+        if self._shapes is None or self._shapes_theta is not ctx.theta:  # the points are fixed in a step
+            self._shapes = (ctx.shape_at(a, g.point_a), ctx.shape_at(b, g.point_b), ctx.shape_at(a, self.shear_a),
+                            ctx.shape_at(b, self.shear_b))
+            self._shapes_theta = ctx.theta
+        ta, tb, tra, trb = self._shapes
         closed = self.state != OPEN
         if np.any(closed):
             locked = (self.state[closed] == LOCKED).astype(float)

@@ -106,6 +106,7 @@ class ContactStep:
         self.friction_normal = normal_force.copy()  # N used for the friction of sliding contacts
         self._secant: tuple[np.ndarray, np.ndarray] | None = None  # previous (N used, residual)
         self._shapes: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._shapes_theta: np.ndarray | None = None  # the rotation increment the shapes were made with
         self._solved_state = state
         self._force_limit: np.ndarray | float = 0.0  # N, per contact: a state change below needs no solve
         # block pairs of the last solve's state changes (for the message of a cut step)
@@ -117,10 +118,11 @@ class ContactStep:
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         g = self.geometry
         a, b = g.vertex_block, g.edge_block
-        tv = ctx.shape_at(a, g.point)
-        tq = ctx.shape_at(b, g.foot)
-        tr = ctx.shape_at(b, g.point_on_edge(self.reference))
-        self._shapes = (tv, tq, tr)
+        if self._shapes is None or self._shapes_theta is not ctx.theta:  # the points are fixed in a step
+            self._shapes = (ctx.shape_at(a, g.point), ctx.shape_at(b, g.foot),
+                            ctx.shape_at(b, g.point_on_edge(self.reference)))
+            self._shapes_theta = ctx.theta
+        tv, tq, tr = self._shapes
         self._solved_state = self.state.copy()  # the states of this solve's forces (for work)
         closed = self.state != OPEN
         if np.any(closed):
