@@ -45,7 +45,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["OPEN", "SLIDING", "LOCKED", "next_states", "negligible_force", "negligible_changes", "never_held"]
+__all__ = ["OPEN", "SLIDING", "LOCKED", "next_states", "negligible_force", "negligible_changes", "never_held",
+           "deepest_penetration"]
 
 OPEN, SLIDING, LOCKED = 0, 1, 2
 
@@ -127,3 +128,9 @@ def never_held(state: np.ndarray, new_state: np.ndarray, gap: np.ndarray, band: 
     cycling = flips >= 2 * freeze_after
     return (((state == LOCKED) & (new_state == SLIDING)) | ((state == OPEN) & (gap < -band))
             | ((state != OPEN) & (new_state == OPEN) & (gap > band) & ~cycling))
+
+
+def deepest_penetration(state: np.ndarray, gap: np.ndarray) -> float:
+    """The largest penetration -g (m) of the closed contacts, 0 when none penetrates."""
+    pen = -gap[state != OPEN]
+    return float(max(pen.max(), 0.0)) if len(pen) else 0.0

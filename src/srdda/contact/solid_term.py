@@ -41,7 +41,7 @@ from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scat
 from ..geometry.polyhedron import PolyhedronMesh
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays, ModelError
 from ..term import LEDGER, StepContext
-from .openclose import LOCKED, OPEN, SLIDING, negligible_changes, negligible_force, never_held
+from .openclose import LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held
 from .polyhedra_broadphase import block_boxes_3d, candidate_pairs_3d
 from .polyhedra_narrowphase import EDGE_EDGE, FOUND_FIELDS, VERTEX_FACE, detect_polyhedra_contacts
 from .term import ContactParameters, ContactTerm, pair_keys
@@ -314,8 +314,7 @@ class SolidContactSet:
 
     @property
     def max_penetration(self) -> float:
-        pen = -self.gap[self.closed]
-        return float(max(pen.max(), 0.0)) if len(pen) else 0.0
+        return deepest_penetration(self.state, self.gap)
 
 
 def _keys(kind: np.ndarray, fa: np.ndarray, fb: np.ndarray, size: int) -> np.ndarray:
@@ -487,8 +486,7 @@ class SolidContactStep:
 
     @property
     def max_penetration(self) -> float:
-        pen = -self.gap[self.state != OPEN]
-        return float(max(pen.max(), 0.0)) if len(pen) else 0.0
+        return deepest_penetration(self.state, self.gap)
 
 
 class SolidContactModel:

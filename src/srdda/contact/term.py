@@ -22,7 +22,8 @@ from ..term import LEDGER, StepContext, StepCut, Term
 from .broadphase import block_boxes, candidate_pairs
 from ..geometry.polygon import previous_vertex_index
 from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts
-from .openclose import LOCKED, OPEN, SLIDING, negligible_changes, negligible_force, never_held, next_states
+from .openclose import (LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held,
+                        next_states)
 from .springs import ContactGeometry, bond_length, contact_geometry
 from .transfer import contact_keys, match_previous
 
@@ -76,8 +77,7 @@ class ContactSet:
 
     @property
     def max_penetration(self) -> float:
-        pen = -self.gap[self.closed]
-        return float(max(pen.max(), 0.0)) if len(pen) else 0.0
+        return deepest_penetration(self.state, self.gap)
 
 
 class ContactStep:
@@ -246,8 +246,7 @@ class ContactStep:
 
     @property
     def max_penetration(self) -> float:
-        pen = -self.gap[self.state != OPEN]
-        return float(max(pen.max(), 0.0)) if len(pen) else 0.0
+        return deepest_penetration(self.state, self.gap)
 
     def _held_in_band(self) -> np.ndarray:
         """Closed contacts in tension beyond their strength (and the negligible force, see
