@@ -1,7 +1,7 @@
 """`srdda verify`: the command, its JSON document, its exit codes, and the manual documenting every case.
 
 The cases' physics is what the cases check (each row against its tolerance); the runs that
-other tests already make (free spin, free fall, incline, nunchaku, the paper's swings) are not
+other tests already make (free spin, free fall, nunchaku, the paper's swings) are not
 repeated here: the command is run on the cases that no other test covers.
 """
 import json
@@ -67,3 +67,11 @@ def test_every_case_is_documented_in_the_manual():
     text = MANUAL.read_text(encoding="utf-8")
     headings = set(re.findall(r"^## `([\w-]+)`", text, flags=re.MULTILINE))
     assert set(CASES) <= headings, set(CASES) - headings
+
+
+def test_the_incline_case_holds_its_manual_tolerance_with_the_default_settings():
+    # the suite's own incline test allows 0.5 %; the manual's row 1e-5. The default open-close
+    # settings once let friction settle only to k_s·f0·w0 and `srdda verify` failed (2.5e-4 and
+    # 9.7e-4) while the suite passed: this runs the manual's row (dda0: the three methods agree there)
+    rows = run_case("incline-2d", quick=False, methods=("dda0",))
+    assert rows and all(r["passed"] is not False for r in rows), [(r["quantity"], r["rel_error"]) for r in rows]

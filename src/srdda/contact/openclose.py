@@ -17,8 +17,10 @@ Shi's tolerance f0·w0 (``tolerance``; f0 = 2e-7 in Shi's and ntdda's codes)
 keeps the iteration short on packed models: a closed contact opens only once
 its gap exceeds f0·w0 (plus T/k_n), a slip must reverse by more than f0·w0,
 and a sliding contact's friction is re-iterated only while it is off by more
-than k_s·f0·w0. An open contact still closes at any penetration, so the band
-only ever drops spring energy, never adds it (docs/contacts.md, "Open-close
+than the negligible force below (k_s·f0·w0 let a sliding block's acceleration
+err by 1e-3: that force scales with the model, not the block). An open
+contact still closes at any penetration, so the band only ever drops spring
+energy, never adds it (docs/contacts.md, "Open-close
 convergence"). A contact still held closed in the band when the iteration ends
 is committed OPEN (:meth:`srdda.contact.term.ContactStep.commit`): its spring's
 energy is dropped. ``tolerance`` = 0 gives the exact rules.
@@ -54,13 +56,14 @@ OPEN, SLIDING, LOCKED = 0, 1, 2
 def next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.ndarray, kn: float, ks: float,
                 tan_phi: np.ndarray, cohesion_force: np.ndarray, tension_force: np.ndarray,
                 closed_this_step: np.ndarray, friction_normal: np.ndarray, friction_tolerance: float = 1e-3,
-                tolerance: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                tolerance: float = 0.0, settled_force: np.ndarray | float = 0.0
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """New (state, slip sign, changed, unsettled) of every contact for end-of-step gap and shear.
 
     ``unsettled``: sliding contacts whose friction used a normal force more
     than ``friction_tolerance`` (relative) away from the solved one, and whose
-    friction force is off by more than k_s × ``tolerance`` (a shear spring's
-    force at the open-close length tolerance).
+    friction force is off by more than ``settled_force`` (N, per contact: the
+    negligible force of :func:`negligible_force`).
 
     ``closed_this_step`` marks contacts that were OPEN in an earlier solve of
     this step; ``friction_normal`` is the normal force the last solve used for
@@ -86,7 +89,7 @@ def next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.
     changed = (new_state != state) | ((new_state == SLIDING) & (new_sign != sign) & friction)
     unsettled = (new_state == SLIDING) & (state == SLIDING) & friction & (
         np.abs(np.maximum(normal, 0.0) - friction_normal) > friction_tolerance * np.maximum(normal, 0.0)) & (
-        np.abs(np.maximum(normal, 0.0) - friction_normal) * tan_phi > ks * tolerance)
+        np.abs(np.maximum(normal, 0.0) - friction_normal) * tan_phi > settled_force)
     return new_state, new_sign, changed, unsettled
 
 

@@ -157,10 +157,13 @@ class ContactStep:
                                              ua - np.einsum("nki,ni->nk", tr, dd[g.edge_block]))
         p = self.params
         self.closed_this_step |= (self.state == OPEN) & (self.gap < 0)
+        normal = np.maximum(-p.normal_stiffness * self.gap, 0.0)
+        self._force_limit = negligible_force(ctx.arrays.block_mass, ctx.arrays.gravity, g.vertex_block,
+                                             g.edge_block, normal, p.force_tolerance)
         state, sign, changed, unsettled = next_states(self.state, self.sign, self.gap, self.shear, p.normal_stiffness,
                                            p.shear_stiffness, self.tan_phi, self.cohesion_force, self.tension_force,
                                            self.closed_this_step, self.friction_normal, p.friction_tolerance,
-                                           p.tolerance)
+                                           p.tolerance, self._force_limit)
         # a contact that has already changed state ``freeze_after`` times in this step keeps its state,
         # so that the iteration ends (it may carry a little tension for one step; the next step
         # starts from the actual gap), except the changes of ``never_held``. After ``settle_after``
@@ -176,7 +179,7 @@ class ContactStep:
         state = np.where(frozen, self.state, state).astype(np.int8)
         sign = np.where(frozen & ~reversed_slip, self.sign, sign).astype(np.int8)
         sign = np.where(reversed_slip, 0, sign).astype(np.int8)
-        changed = np.where(frozen, reversed_slip, changed) & ~self._negligible(state, ctx.arrays)
+        changed = np.where(frozen, reversed_slip, changed) & ~self._negligible(state)
         if self.iterations < p.settle_after:  # then friction forces are taken as they are
             changed = changed | unsettled
         self.flips += state != self.state
@@ -188,17 +191,14 @@ class ContactStep:
         self.unsettled_pairs = np.column_stack([g.vertex_block[changed], g.edge_block[changed]])
         return not bool(np.any(changed))
 
-    def _negligible(self, new_state: np.ndarray, arrays: ModelArrays) -> np.ndarray:
+    def _negligible(self, new_state: np.ndarray) -> np.ndarray:
         """Closings and slips below :func:`negligible_force`: they take their new state without another
         solve and act from the next solve or step. They bring no work into the step: a late closing stores
         at most ½(limit)²/k_n, a late slip only loses its spring's energy."""
         p = self.params
         if p.force_tolerance == 0.0:
             return np.zeros(len(new_state), dtype=bool)
-        g = self.geometry
         normal = np.maximum(-p.normal_stiffness * self.gap, 0.0)
-        self._force_limit = negligible_force(arrays.block_mass, arrays.gravity, g.vertex_block, g.edge_block,
-                                             normal, p.force_tolerance)
         return negligible_changes(self.state, new_state, normal, p.shear_stiffness * np.abs(self.shear),
                                   normal * self.tan_phi + self.cohesion_force, self._force_limit)
 
