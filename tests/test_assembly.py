@@ -61,3 +61,77 @@ def test_scatter_add_is_np_add_at_bit_for_bit():
         np.add.at(expected, index, values)
         scatter_add(got, index, values)
         assert np.array_equal(got, expected)
+
+
+def test_block_sums_are_np_add_reduceat_bit_for_bit():
+    # to_bsr sums each (i, j) block's contributions in numpy's own order (the first, then the pairwise sum
+    # of the rest), so the matrix has the bits of the np.add.reduceat it replaced; segment lengths cross
+    # numpy's unrolled (8) and blocked (128) pairwise thresholds; a third of the blocks are read transposed
+    from srdda.assembly.system import _segment_sums
+    rng = np.random.default_rng(4)
+    lengths = np.concatenate([rng.integers(1, 12, 400), [8, 9, 10, 16, 17, 128, 129, 130, 257, 1000]])
+    total = int(lengths.sum())
+    blocks = rng.normal(size=(total, 6, 6)) * 10.0 ** rng.integers(-8, 8, size=(total, 1, 1))
+    first = np.r_[0, np.cumsum(lengths)[:-1]]
+    order = rng.permutation(total)
+    flip = (rng.random(total) < 1 / 3).astype(np.int8)
+    entries = np.arange(36)
+    layouts = np.stack([entries, entries.reshape(6, 6).T.ravel()])
+    got = np.empty((len(first), 36))
+    _segment_sums(blocks.reshape(total, 36), order, flip, layouts, first, got)
+    sorted_blocks = blocks[order]
+    sorted_blocks[flip == 1] = np.swapaxes(sorted_blocks[flip == 1], 1, 2)
+    assert np.array_equal(got, np.add.reduceat(sorted_blocks, first, axis=0).reshape(len(first), 36))
+
+
+def _penalty_by_einsum(system, pairs, factor):
+    """add_penalty_pairs as whole-array einsums and np.add.at (the form the compiled pass replaced)."""
+    k, ta = pairs.stiffness, pairs.t_a
+    kta = k[:, None, None] * ta
+    np.add.at(system.diag, pairs.block_a, factor * np.einsum("nki,nkj->nij", kta, ta))
+    np.add.at(system.rhs, pairs.block_a, -np.einsum("nki,nk->ni", kta, pairs.gap))
+    if pairs.t_b is None:
+        return
+    linked = pairs.block_b >= 0
+    a, b, tb = pairs.block_a[linked], pairs.block_b[linked], pairs.t_b[linked]
+    ktb = k[linked, None, None] * tb
+    np.add.at(system.diag, b, factor * np.einsum("nki,nkj->nij", ktb, tb))
+    np.add.at(system.rhs, b, np.einsum("nki,nk->ni", ktb, pairs.gap[linked]))
+    cross = -factor * np.einsum("nki,nkj->nij", kta[linked], tb)
+    same = a == b
+    np.add.at(system.diag, a[same], cross[same] + np.swapaxes(cross[same], 1, 2))
+    system.add_off_diagonal(a[~same], b[~same], cross[~same])
+
+
+def test_compiled_penalty_pairs_equal_the_einsum_sums_bit_for_bit():
+    # the paper's rows (the rockfall amplifies a last-bit change to 1e-6) depend on these sums being the
+    # same bits: 1 to 3 rows per spring, 2D and 3D blocks, springs to the ground, within one block, repeated
+    rng = np.random.default_rng(6)
+    for trial in range(60):
+        nb, ndof, rows = 6, (6, 12)[trial % 2], 1 + trial % 3
+        n = int(rng.integers(1, 40))
+        a = rng.integers(0, nb, n)
+        b = np.full(n, -1) if trial % 4 == 0 else rng.integers(-1, nb, n)
+        ta = rng.normal(size=(n, rows, ndof))
+        tb = None if trial % 5 == 0 else rng.normal(size=(n, rows, ndof))
+        pairs = PenaltyPairs(a, ta, b, tb, rng.normal(size=(n, rows)), np.exp(rng.normal(size=n)))
+        start = rng.normal(size=(nb, ndof, ndof))
+        got, expected = (BlockSystem(start.copy(), np.zeros((nb, ndof))) for _ in range(2))
+        add_penalty_pairs(got, pairs, 0.7)
+        _penalty_by_einsum(expected, pairs, 0.7)
+        assert np.array_equal(got.diag, expected.diag) and np.array_equal(got.rhs, expected.rhs)
+        assert np.array_equal(got.to_bsr().toarray(), expected.to_bsr().toarray())
+
+
+def test_held_blocks_are_identity_rows_without_couplings():
+    # fix_blocks keeps the coupling stacks and leaves the held blocks' couplings out when the matrix is made:
+    # the matrix is the naive sum with every row and column of a held block replaced by the identity's
+    system, naive = _random_system(seed=2)
+    held = np.array([True, False, False, True, False, False, False])
+    system.fix_blocks(held)
+    rows = np.repeat(held, 6)
+    naive[rows, :] = 0.0
+    naive[:, rows] = 0.0
+    naive[rows, rows] = 1.0
+    assert np.allclose(system.to_bsr().toarray(), naive, rtol=0, atol=1e-14)
+    assert np.allclose(system.to_dense(), naive, rtol=0, atol=1e-14)

@@ -214,3 +214,25 @@ def test_penetrating_corner_is_found_on_either_side_of_rounding(outside):
     found = _detect(arr)
     v = tuple(arr.vertices[4])
     assert any(f[0] == v and f[1] == (1.0, 1.0) for f in found), found
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_kept_candidates_are_the_fresh_broad_phase_in_its_order(dim):
+    # 200 blocks (as 8 vertices each) wander by random steps of up to 0.3 d0 per axis: at every step the
+    # kept list, filtered, must be exactly the broad phase run afresh, pairs and order; and the broad
+    # phase runs again only after some vertex moved more than the margin's half (here about every 2-3 steps)
+    from srdda.contact.candidates import KeptCandidates
+    from srdda.contact.polyhedra_broadphase import candidate_pairs_3d
+    find = candidate_pairs if dim == 2 else candidate_pairs_3d
+    rng = np.random.default_rng(7)
+    n, d0 = 200, 0.1
+    centres = rng.uniform(0, 4, (n, dim))
+    corners = rng.uniform(-0.15, 0.15, (n, 8, dim))
+    kept = KeptCandidates(find, d0, d0)
+    steps = 40
+    for _ in range(steps):
+        vertices = (centres[:, None, :] + corners).reshape(-1, dim)
+        boxes = np.hstack([vertices.reshape(n, 8, dim).min(axis=1), vertices.reshape(n, 8, dim).max(axis=1)])
+        assert np.array_equal(kept(vertices, boxes), find(boxes, d0))
+        centres += rng.uniform(-0.3 * d0, 0.3 * d0, (n, dim))
+    assert 5 < kept.searches < steps

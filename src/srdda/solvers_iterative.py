@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+from numba import njit
 
 __all__ = ["PCGResult", "IterativeSolverError", "pcg", "smallest_eigenvalue_estimate", "BlockJacobi",
            "SmoothedAggregation", "block_modes"]
@@ -140,8 +141,27 @@ def smallest_eigenvalue_estimate(matvec: Callable[[Array], Array], precondition:
     return pcg(matvec, precondition, matvec(start), 0.0 * start, 0.0, iterations).smallest_ritz
 
 
+@njit(cache=True)
+def _block_products(inverse: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """``(inverse @ r.reshape(-1, ndof, 1)).reshape(-1)`` in one compiled pass (no batched-matmul set-up)."""
+    n, ndof, _ = inverse.shape
+    out = np.empty(n * ndof)
+    for i in range(n):
+        for a in range(ndof):
+            acc = 0.0
+            for b in range(ndof):
+                acc += inverse[i, a, b] * r[i * ndof + b]
+            out[i * ndof + a] = acc
+    return out
+
+
 class BlockJacobi:
-    """M = the block diagonal of A (ndof×ndof blocks): its inverse applied to all blocks at once."""
+    """M = the block diagonal of A (ndof×ndof blocks): its inverse applied to all blocks at once.
+
+    On numpy arrays the product is one compiled loop (a third of the batched
+    matmul's time on 10,000 blocks, measured in docs/performance.md); other
+    arrays (CuPy) take the batched product.
+    """
 
     def __init__(self, diag: np.ndarray) -> None:
         try:
@@ -153,6 +173,8 @@ class BlockJacobi:
         self.ndof = diag.shape[1]
 
     def __call__(self, r: Array) -> Array:
+        if isinstance(r, np.ndarray):
+            return _block_products(self.inverse, r)
         return (self.inverse @ r.reshape(-1, self.ndof, 1)).reshape(-1)
 
 

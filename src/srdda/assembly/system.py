@@ -2,8 +2,9 @@
 
 Sub-matrices are kept as dense stacks until the solve: ``diag`` (nb, ndof, ndof)
 for every block and ``pair_blocks`` (np, ndof, ndof) for coupled pairs (row block
-``pair_i``, column block ``pair_j``, both orders present). Conversion to CSR is
-one ``coo_matrix`` call; to dense (tiny models) one ``np.add.at``.
+``pair_i``, column block ``pair_j``; the transposed block at (j, i) is implied). The
+block-sparse matrix sums them in one compiled pass (``to_bsr``); the dense one of
+tiny models by ``np.bincount``.
 
 Exact constraints (hinges, pins, prescribed motion by multipliers, paper
 Eqs. 72-75) add rows C (nc, n) with right-hand side g: the system becomes the
@@ -27,6 +28,78 @@ def _scatter_rows(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> 
         row = index[i]
         for j in range(values.shape[1]):
             target[row, j] += values[i, j]
+
+
+@njit(cache=True)
+def _pairwise_sum(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray, lo: int, n: int,
+                  j: int) -> float:
+    """numpy's pairwise sum of entry j of the blocks at sorted positions lo..lo+n (its add.reduce order,
+    loops_utils.h); ``order``, ``flip`` and ``layouts`` as in :func:`_segment_sums`."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += blocks[order[lo + i], layouts[flip[lo + i], j]]
+        return res
+    if n <= 128:
+        r = np.empty(8)
+        for m in range(8):
+            r[m] = blocks[order[lo + m], layouts[flip[lo + m], j]]
+        i = 8
+        while i < n - n % 8:
+            for m in range(8):
+                r[m] += blocks[order[lo + i + m], layouts[flip[lo + i + m], j]]
+            i += 8
+        width = 1  # the tree ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while width < 8:
+            for m in range(0, 8, width + width):
+                r[m] += r[m + width]
+            width += width
+        res = r[0]
+        while i < n:
+            res += blocks[order[lo + i], layouts[flip[lo + i], j]]
+            i += 1
+        return res
+    half = n // 2
+    half -= half % 8
+    return (_pairwise_sum(blocks, order, flip, layouts, lo, half, j)
+            + _pairwise_sum(blocks, order, flip, layouts, lo + half, n - half, j))
+
+
+@njit(cache=True)
+def _segment_sums(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray, first: np.ndarray,
+                  out: np.ndarray) -> None:
+    """``out[s]``: the sum of the blocks at sorted positions first[s]..first[s+1], as np.add.reduceat sums them.
+
+    The block at sorted position p is row ``order[p]`` of ``blocks`` (n, ndof²)
+    read through ``layouts[flip[p]]`` (``layouts`` (2, ndof²): the entries in
+    order, then the transpose's), so no sorted or transposed copy is made. numpy adds a segment's first block to the
+    pairwise sum of the others; short segments (the usual case: a few contacts
+    between two blocks) are summed block by block, long ones entry by entry in
+    numpy's pairwise order: the same bits as the reduceat it replaced.
+    """
+    width = blocks.shape[1]
+    rest = np.empty(width)
+    for s in range(first.shape[0]):
+        lo = first[s]
+        hi = first[s + 1] if s + 1 < first.shape[0] else order.shape[0]
+        head = order[lo]
+        if hi - lo <= 8:
+            rest[:] = 0.0
+            for i in range(lo + 1, hi):
+                row = order[i]
+                if flip[i] == 0:
+                    for j in range(width):
+                        rest[j] += blocks[row, j]
+                else:
+                    for j in range(width):
+                        rest[j] += blocks[row, layouts[1, j]]
+            for j in range(width):
+                value = blocks[head, layouts[flip[lo], j]]
+                out[s, j] = value + rest[j] if hi - lo > 1 else value
+        else:
+            for j in range(width):
+                rest_sum = _pairwise_sum(blocks, order, flip, layouts, lo + 1, hi - lo - 1, j)
+                out[s, j] = blocks[head, layouts[flip[lo], j]] + rest_sum
 
 
 def scatter_add(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
@@ -58,6 +131,7 @@ class BlockSystem:
     con_cols: list[np.ndarray] = field(default_factory=list)
     con_vals: list[np.ndarray] = field(default_factory=list)
     con_rhs: list[np.ndarray] = field(default_factory=list)
+    held: np.ndarray | None = None  # (nb,) blocks held by fix_blocks: their couplings are left out of the matrix
 
     @staticmethod
     def empty(n_blocks: int, ndof: int) -> BlockSystem:
@@ -149,25 +223,46 @@ class BlockSystem:
         """Add K_ij blocks (and their transposes at (j, i)); bi != bj required."""
         if len(bi) == 0:
             return
-        self.pair_i += [bi, bj]
-        self.pair_j += [bj, bi]
-        self.pair_blocks += [blocks, np.swapaxes(blocks, 1, 2)]
+        self.pair_i.append(bi)
+        self.pair_j.append(bj)
+        self.pair_blocks.append(blocks)
 
     def fix_blocks(self, fixed: np.ndarray) -> None:
-        """Hold the blocks where ``fixed`` is True: identity rows, zero rhs, couplings dropped."""
+        """Hold the blocks where ``fixed`` is True: identity rows, zero rhs, couplings dropped.
+
+        The couplings stay in the stacks and are left out when the matrix is
+        made (``held``): filtering the stacks here copied them at every solve.
+        """
         if not np.any(fixed):
             return
         self.diag[fixed] = np.eye(self.ndof)
         self.rhs[fixed] = 0.0
-        keep_i, keep_j, keep_b = [], [], []
-        for bi, bj, blocks in zip(self.pair_i, self.pair_j, self.pair_blocks):
-            free = ~(fixed[bi] | fixed[bj])
-            keep_i.append(bi[free])
-            keep_j.append(bj[free])
-            keep_b.append(blocks[free])
-        self.pair_i, self.pair_j, self.pair_blocks = keep_i, keep_j, keep_b
+        self.held = fixed
         for k, cols in enumerate(self.con_cols):  # a held block's columns drop out of C
             self.con_vals[k] = np.where(fixed[cols // self.ndof], 0.0, self.con_vals[k])
+
+    def _couplings(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Every coupling block in both orders: (row block, column block, its row in [diag; stacks], transposed).
+
+        The order is that of the stacks, each stack's blocks then their
+        transposes (the order of the sums, so the bits of the matrix).
+        """
+        rows, cols, source, flip = [], [], [], []
+        offset = self.n_blocks
+        for bi, bj in zip(self.pair_i, self.pair_j):
+            index = offset + np.arange(len(bi))
+            rows += [bi, bj]
+            cols += [bj, bi]
+            source += [index, index]
+            flip += [np.zeros(len(bi), dtype=np.int8), np.ones(len(bi), dtype=np.int8)]
+            offset += len(bi)
+        return np.concatenate(rows), np.concatenate(cols), np.concatenate(source), np.concatenate(flip)
+
+    def _free_couplings(self, bi: np.ndarray, bj: np.ndarray) -> np.ndarray:
+        """Indices of the couplings between two blocks that are not held."""
+        if self.held is None:
+            return np.arange(len(bi))
+        return np.flatnonzero(~(self.held[bi] | self.held[bj]))
 
     def triplets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(rows, cols, values) of every stored entry, duplicates not summed."""
@@ -178,11 +273,14 @@ class BlockSystem:
         cols = [(base[:, None, None] + c).ravel()]
         vals = [self.diag.ravel()]
         if self.pair_i:
-            bi = np.concatenate(self.pair_i) * ndof
-            bj = np.concatenate(self.pair_j) * ndof
-            rows.append((bi[:, None, None] + r).ravel())
-            cols.append((bj[:, None, None] + c).ravel())
-            vals.append(np.concatenate(self.pair_blocks).ravel())
+            bi, bj, source, flip = self._couplings()
+            free = self._free_couplings(bi, bj)
+            blocks = np.concatenate([self.diag, *self.pair_blocks])[source[free]]
+            turned = flip[free] == 1
+            blocks[turned] = np.swapaxes(blocks[turned], 1, 2)
+            rows.append((bi[free, None, None] * ndof + r).ravel())
+            cols.append((bj[free, None, None] * ndof + c).ravel())
+            vals.append(blocks.ravel())
         return np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
 
     def to_bsr(self) -> sp.bsr_matrix:
@@ -195,12 +293,20 @@ class BlockSystem:
         n = self.size
         if not self.pair_i:
             return sp.bsr_matrix((self.diag, np.arange(nb), np.arange(nb + 1)), shape=(n, n))
-        key = np.concatenate([np.arange(nb) * (nb + 1), *(i * nb + j for i, j in zip(self.pair_i, self.pair_j))])
-        blocks = np.concatenate([self.diag, *self.pair_blocks])
+        bi, bj, source, flip = self._couplings()
+        free = self._free_couplings(bi, bj)
+        key = np.concatenate([np.arange(nb) * (nb + 1), bi[free] * nb + bj[free]])
         order = np.argsort(key, kind="stable")
         key = key[order]
         first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-        data = np.add.reduceat(blocks[order], first, axis=0)
+        # the sorted blocks as rows of [diag; stacks], read in place or transposed
+        blocks = np.concatenate([self.diag, *self.pair_blocks]).reshape(-1, self.ndof * self.ndof)
+        entries = np.arange(self.ndof * self.ndof)
+        layouts = np.stack([entries, entries.reshape(self.ndof, self.ndof).T.ravel()])
+        data = np.empty((len(first), self.ndof, self.ndof))
+        _segment_sums(blocks, np.concatenate([np.arange(nb), source[free]])[order],
+                      np.concatenate([np.zeros(nb, dtype=np.int8), flip[free]])[order], layouts, first,
+                      data.reshape(len(first), -1))
         rows, cols = np.divmod(key[first], nb)
         indptr = np.searchsorted(rows, np.arange(nb + 1))
         return sp.bsr_matrix((data, cols, indptr), shape=(n, n))
@@ -236,32 +342,95 @@ class PenaltyPairs:
     stiffness: np.ndarray
 
 
+@njit(cache=True)
+def _scale_rows(out: np.ndarray, k: float, t: np.ndarray) -> None:
+    """out = k·t, without a temporary."""
+    for r in range(t.shape[0]):
+        for i in range(t.shape[1]):
+            out[r, i] = k * t[r, i]
+
+
+@njit(cache=True)
+def _add_products(target: np.ndarray, scale: float, kt: np.ndarray, u: np.ndarray, row: np.ndarray) -> None:
+    """target[i, j] += scale · Σ_r kt[r, i]·u[r, j], the sum from zero with the rows in turn (einsum's order).
+
+    One row i at a time in ``row``, j innermost (contiguous, vectorised).
+    """
+    rows, ndof = kt.shape
+    for i in range(ndof):
+        row[:] = 0.0
+        for r in range(rows):
+            k = kt[r, i]
+            for j in range(ndof):
+                row[j] += k * u[r, j]
+        for j in range(ndof):
+            target[i, j] += scale * row[j]
+
+
+@njit(cache=True)
+def _penalty_kernel(diag: np.ndarray, rhs: np.ndarray, block_a: np.ndarray, t_a: np.ndarray, block_b: np.ndarray,
+                    t_b: np.ndarray, gap: np.ndarray, stiffness: np.ndarray, factor: float,
+                    cross: np.ndarray) -> None:
+    """The sums of :func:`add_penalty_pairs` (``block_b`` -1: the spring ties block a to the ground).
+
+    Done as the einsums and scatters it replaced did them, in the same order,
+    so the same bits: each product sum starts from zero and adds the k rows in
+    turn; each target block receives its additions in spring order, first all
+    the a blocks' then all the b blocks'. ``cross`` (n, ndof, ndof) receives
+    -factor·Σ k·t_aᵀt_b; a spring within one block adds cross + crossᵀ to its
+    diagonal block last.
+    """
+    n, rows, ndof = t_a.shape
+    kt = np.empty((rows, ndof))
+    row = np.empty(ndof)
+    for side in range(2):
+        blocks = block_a if side == 0 else block_b
+        t = t_a if side == 0 else t_b
+        sign = -1.0 if side == 0 else 1.0
+        for c in range(n):
+            if blocks[c] >= 0:
+                _scale_rows(kt, stiffness[c], t[c])
+                _add_products(diag[blocks[c]], factor, kt, t[c], row)
+        for c in range(n):
+            if blocks[c] >= 0:
+                for i in range(ndof):
+                    acc = 0.0
+                    for r in range(rows):
+                        acc += (stiffness[c] * t[c, r, i]) * gap[c, r]
+                    rhs[blocks[c], i] += sign * acc
+    for c in range(n):
+        cross[c] = 0.0
+        if block_b[c] >= 0:
+            _scale_rows(kt, stiffness[c], t_a[c])
+            _add_products(cross[c], -factor, kt, t_b[c], row)
+    for c in range(n):
+        if block_a[c] == block_b[c]:
+            for i in range(ndof):
+                for j in range(ndof):
+                    diag[block_a[c], i, j] += cross[c, i, j] + cross[c, j, i]
+
+
 def add_penalty_pairs(system: BlockSystem, pairs: PenaltyPairs, factor: float) -> None:
     """Add penalty springs to ``system``: matrix ``factor·k·TᵀT``, rhs ``-k·Tᵀg``.
 
     ``factor`` is the scheme's penalty weight c_p (1 for Shi and the paper's
     scheme, 1 - αf for Chung-Hulbert); the pull-back force always enters whole.
+    One compiled pass (:func:`_penalty_kernel`) sums every spring.
     """
-    if len(pairs.block_a) == 0:
+    n = len(pairs.block_a)
+    if n == 0:
         return
-    k = pairs.stiffness
-    ta = pairs.t_a
-    kta = k[:, None, None] * ta
-    scatter_add(system.diag, pairs.block_a, factor * np.einsum("nki,nkj->nij", kta, ta))
-    scatter_add(system.rhs, pairs.block_a, -np.einsum("nki,nk->ni", kta, pairs.gap))
-    if pairs.t_b is None:
-        return
-    linked = pairs.block_b >= 0
-    if not np.any(linked):
-        return
-    a = pairs.block_a[linked]
-    b = pairs.block_b[linked]
-    tb = pairs.t_b[linked]
-    ktb = k[linked, None, None] * tb
-    scatter_add(system.diag, b, factor * np.einsum("nki,nkj->nij", ktb, tb))
-    scatter_add(system.rhs, b, np.einsum("nki,nk->ni", ktb, pairs.gap[linked]))
-    cross = -factor * np.einsum("nki,nkj->nij", kta[linked], tb)
-    same = a == b
-    if np.any(same):
-        scatter_add(system.diag, a[same], cross[same] + np.swapaxes(cross[same], 1, 2))
-    system.add_off_diagonal(a[~same], b[~same], cross[~same])
+    f64 = np.float64
+    t_a = np.ascontiguousarray(pairs.t_a, dtype=f64)
+    grounded = pairs.t_b is None
+    block_b = np.full(n, -1, dtype=np.int64) if grounded else np.ascontiguousarray(pairs.block_b, dtype=np.int64)
+    cross = np.empty((n, system.ndof, system.ndof))
+    _penalty_kernel(system.diag, system.rhs, np.ascontiguousarray(pairs.block_a, dtype=np.int64), t_a, block_b,
+                    t_a if grounded else np.ascontiguousarray(pairs.t_b, dtype=f64),
+                    np.ascontiguousarray(pairs.gap, dtype=f64), np.ascontiguousarray(pairs.stiffness, dtype=f64),
+                    float(factor), cross)
+    coupled = (block_b >= 0) & (pairs.block_a != block_b)
+    if np.all(coupled):  # the usual case (contacts): no copy of the cross blocks
+        system.add_off_diagonal(pairs.block_a, block_b, cross)
+    else:
+        system.add_off_diagonal(pairs.block_a[coupled], block_b[coupled], cross[coupled])

@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
+from .candidates import grow_boxes
+
 __all__ = ["block_boxes", "candidate_pairs"]
 
 
@@ -22,14 +24,14 @@ def block_boxes(vertices: np.ndarray, block_ptr: np.ndarray) -> np.ndarray:
 
 
 def candidate_pairs(boxes: np.ndarray, margin: float, movable: np.ndarray | None = None) -> np.ndarray:
-    """Pairs (k, 2) of blocks a < b whose boxes grown by ``margin`` overlap.
+    """Pairs (k, 2) of blocks a < b whose boxes grown by ``margin`` overlap, sorted.
 
     Pairs of two blocks that cannot move (``movable`` False for both) are left out:
     no contact between them can ever act.
     """
     if len(boxes) < 2:
         return np.empty((0, 2), dtype=np.int64)
-    grown = boxes + np.array([-margin, -margin, margin, margin]) * 0.5
+    grown = grow_boxes(boxes, margin)
     geoms = shapely.box(grown[:, 0], grown[:, 1], grown[:, 2], grown[:, 3])
     tree = shapely.STRtree(geoms)
     query, found = tree.query(geoms)  # envelope overlap: exact for axis-aligned boxes
@@ -37,4 +39,4 @@ def candidate_pairs(boxes: np.ndarray, margin: float, movable: np.ndarray | None
     pairs = np.column_stack([query[keep], found[keep]]).astype(np.int64)
     if movable is not None:
         pairs = pairs[movable[pairs[:, 0]] | movable[pairs[:, 1]]]
-    return pairs
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]

@@ -24,6 +24,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .candidates import grow_boxes
+
 __all__ = ["block_boxes_3d", "candidate_pairs_3d"]
 
 
@@ -143,7 +145,7 @@ def candidate_pairs_3d(boxes: np.ndarray, margin: float, movable: np.ndarray | N
     nb = len(boxes)
     if nb < 2:
         return np.empty((0, 2), dtype=np.int64)
-    grown = boxes + 0.5 * margin * np.repeat([-1.0, 1.0], 3)
+    grown = grow_boxes(boxes, margin)
     movable = np.ones(nb, dtype=bool) if movable is None else np.asarray(movable, dtype=bool)
     extent = np.max(grown[:, 3:] - grown[:, :3], axis=1)
     h = 2.0 * float(np.median(extent))

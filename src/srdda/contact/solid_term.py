@@ -42,6 +42,7 @@ from ..geometry.polyhedron import PolyhedronMesh
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays, ModelError
 from ..term import LEDGER, StepContext
 from .openclose import LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held
+from .candidates import KeptCandidates
 from .polyhedra_broadphase import block_boxes_3d, candidate_pairs_3d
 from .polyhedra_narrowphase import EDGE_EDGE, FOUND_FIELDS, VERTEX_FACE, detect_polyhedra_contacts
 from .term import ContactParameters, ContactTerm, pair_keys
@@ -355,6 +356,7 @@ class SolidContactStep:
         self.unsettled_pairs = np.column_stack([geometry.block_a[:0], geometry.block_b[:0]])
         self._shapes: tuple[np.ndarray, ...] | None = None
         self._shapes_theta: np.ndarray | None = None  # the rotation increment the shapes were made with
+        self._rows: tuple[np.ndarray, ...] = ()  # n·T and e·T at the shapes (add_to)
 
     def __len__(self) -> int:
         return len(self.state)
@@ -366,17 +368,19 @@ class SolidContactStep:
             self._shapes = (ctx.shape_at(a, g.point_a), ctx.shape_at(b, g.point_b), ctx.shape_at(a, self.shear_a),
                             ctx.shape_at(b, self.shear_b))
             self._shapes_theta = ctx.theta
+            ta, tb, tra, trb = self._shapes
+            # the springs' unit rows n·T and e·T of every contact, whatever its state in the solves
+            self._rows = (np.einsum("ni,nij->nj", g.normal, ta), np.einsum("nki,nij->nkj", g.frame, tra),
+                          np.einsum("ni,nij->nj", g.normal, tb), np.einsum("nki,nij->nkj", g.frame, trb))
         ta, tb, tra, trb = self._shapes
         closed = self.state != OPEN
         if np.any(closed):
             locked = (self.state[closed] == LOCKED).astype(float)
             rn = np.sqrt(self.params.normal_stiffness)
             rs = np.sqrt(self.params.shear_stiffness) * locked
-            n, e = g.normal[closed], g.frame[closed]
-            rows_a = np.concatenate([rn * np.einsum("ni,nij->nj", n, ta[closed])[:, None],
-                                     rs[:, None, None] * np.einsum("nki,nij->nkj", e, tra[closed])], axis=1)
-            rows_b = np.concatenate([rn * np.einsum("ni,nij->nj", n, tb[closed])[:, None],
-                                     rs[:, None, None] * np.einsum("nki,nij->nkj", e, trb[closed])], axis=1)
+            normal_a, shear_a, normal_b, shear_b = (row[closed] for row in self._rows)
+            rows_a = np.concatenate([rn * normal_a[:, None], rs[:, None, None] * shear_a], axis=1)
+            rows_b = np.concatenate([rn * normal_b[:, None], rs[:, None, None] * shear_b], axis=1)
             gap = np.column_stack([rn * g.gap[closed], rs[:, None] * self.shear0[closed]])
             add_penalty_pairs(system, PenaltyPairs(a[closed], rows_a, b[closed], rows_b, gap,
                                                    np.ones(int(closed.sum()))), ctx.coeffs.c_p)
@@ -507,13 +511,16 @@ class SolidContactModel:
         partners_left_out = np.bincount(np.concatenate([first, second]), minlength=arrays.n_blocks)
         self.can_touch = partners_left_out < arrays.n_blocks - 1
         self.key_size = max(len(arrays.vertices), len(self.mesh.face_block), len(self.topology.edge_v0)) + 1
+        # as in 2D: the broad phase with a margin of d0, run again once a vertex has moved d0/2
+        self.candidates = KeptCandidates(lambda boxes, d: candidate_pairs_3d(boxes, d, self.movable),
+                                         params.distance, params.distance)
 
     def detect(self, vertices: np.ndarray) -> tuple[np.ndarray, SurfaceGeometry]:
         """Contacts (k, 5) [kind, feature a, feature b, block a, block b] of a configuration, and its surfaces."""
         arr, topo, mesh = self.arrays, self.topology, self.mesh
         surface = surface_geometry(vertices, mesh, topo, self.sin_tol)
         boxes = block_boxes_3d(vertices, arr.block_ptr)
-        pairs = candidate_pairs_3d(boxes, self.params.distance, self.movable)
+        pairs = self.candidates(vertices, boxes)
         if len(self.excluded):
             pairs = pairs[~np.isin(pair_keys(pairs, arr.n_blocks), self.excluded)]
         if len(pairs) == 0:

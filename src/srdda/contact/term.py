@@ -20,6 +20,7 @@ from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scat
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays
 from ..term import LEDGER, StepContext, StepCut, Term
 from .broadphase import block_boxes, candidate_pairs
+from .candidates import KeptCandidates
 from ..geometry.polygon import previous_vertex_index
 from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts
 from .openclose import (LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held,
@@ -107,6 +108,7 @@ class ContactStep:
         self._secant: tuple[np.ndarray, np.ndarray] | None = None  # previous (N used, residual)
         self._shapes: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._shapes_theta: np.ndarray | None = None  # the rotation increment the shapes were made with
+        self._rows: tuple[np.ndarray, ...] = ()  # n·T and t·T at the shapes (add_to)
         self._solved_state = state
         self._force_limit: np.ndarray | float = 0.0  # N, per contact: a state change below needs no solve
         # block pairs of the last solve's state changes (for the message of a cut step)
@@ -122,6 +124,10 @@ class ContactStep:
             self._shapes = (ctx.shape_at(a, g.point), ctx.shape_at(b, g.foot),
                             ctx.shape_at(b, g.point_on_edge(self.reference)))
             self._shapes_theta = ctx.theta
+            tv, tq, tr = self._shapes
+            # the springs' unit rows n·T and t·T of every contact, whatever its state in the solves
+            self._rows = (np.einsum("nk,nki->ni", g.normal, tv), np.einsum("nk,nki->ni", g.tangent, tv),
+                          np.einsum("nk,nki->ni", g.normal, tq), np.einsum("nk,nki->ni", g.tangent, tr))
         tv, tq, tr = self._shapes
         self._solved_state = self.state.copy()  # the states of this solve's forces (for work)
         closed = self.state != OPEN
@@ -129,11 +135,9 @@ class ContactStep:
             locked = (self.state[closed] == LOCKED).astype(float)
             rn = np.sqrt(self.params.normal_stiffness)
             rs = np.sqrt(self.params.shear_stiffness) * locked
-            n, t = g.normal[closed], g.tangent[closed]
-            t_a = np.stack([rn * np.einsum("nk,nki->ni", n, tv[closed]),
-                            rs[:, None] * np.einsum("nk,nki->ni", t, tv[closed])], axis=1)
-            t_b = np.stack([rn * np.einsum("nk,nki->ni", n, tq[closed]),
-                            rs[:, None] * np.einsum("nk,nki->ni", t, tr[closed])], axis=1)
+            normal_a, shear_a, normal_b, shear_b = (row[closed] for row in self._rows)
+            t_a = np.stack([rn * normal_a, rs[:, None] * shear_a], axis=1)
+            t_b = np.stack([rn * normal_b, rs[:, None] * shear_b], axis=1)
             gap = np.column_stack([rn * g.gap[closed], rs * self.shear0[closed]])
             add_penalty_pairs(system, PenaltyPairs(a[closed], t_a, b[closed], t_b, gap, np.ones(int(closed.sum()))),
                               ctx.coeffs.c_p)
@@ -312,12 +316,15 @@ class ContactModel:
         first, second = np.divmod(self.excluded, arrays.n_blocks)
         partners_left_out = np.bincount(np.concatenate([first, second]), minlength=arrays.n_blocks)
         self.can_touch = partners_left_out < arrays.n_blocks - 1  # some other block may touch it
+        # the broad phase with a margin of d0, run again once a vertex has moved d0/2 (contact.candidates)
+        self.candidates = KeptCandidates(lambda boxes, d: candidate_pairs(boxes, d, self.movable),
+                                         params.distance, params.distance)
 
     def detect(self, vertices: np.ndarray) -> np.ndarray:
         """Contacts (k, 3) [vertex, edge start, kind] of a configuration."""
         arr = self.arrays
         boxes = block_boxes(vertices, arr.block_ptr)
-        pairs = candidate_pairs(boxes, self.params.distance, self.movable)
+        pairs = self.candidates(vertices, boxes)
         if len(self.excluded):
             pairs = pairs[~np.isin(pair_keys(pairs, arr.n_blocks), self.excluded)]
         if len(pairs) == 0:

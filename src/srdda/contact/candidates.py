@@ -1,0 +1,59 @@
+"""Candidate block pairs kept across steps (issue 14): the broad phase run again only after blocks moved.
+
+The broad phase finds the pairs whose boxes, grown by the contact distance
+d0, overlap. :class:`KeptCandidates` runs it with d0 + m (m: the margin) and
+keeps that list; at every later detection it only filters the kept pairs by
+the d0 test on the current boxes, until some vertex has moved more than m/2
+along an axis since the list was made, when the broad phase runs again.
+
+Why the filtered list is the broad phase's own: a box side moves no more
+than its vertices do along that axis, so two boxes whose d0-grown boxes
+overlap now were within d0 + m along every axis when the list was made,
+and are in it. Both broad phases return their pairs sorted (a, b), so the
+filtered list is the fresh one, in the same order: contacts, assembly and
+results are the same bits with or without the kept list
+(tests/test_contact_detection.py).
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+__all__ = ["grow_boxes", "boxes_within", "KeptCandidates"]
+
+
+def grow_boxes(boxes: np.ndarray, distance: float) -> np.ndarray:
+    """Boxes (nb, 2·dim) [lower corner, upper corner] grown by ``distance`` / 2 on every side."""
+    dim = boxes.shape[1] // 2
+    return boxes + 0.5 * distance * np.repeat([-1.0, 1.0], dim)
+
+
+def boxes_within(boxes: np.ndarray, pairs: np.ndarray, distance: float) -> np.ndarray:
+    """Which ``pairs`` (k, 2) have boxes that overlap (touching counts) once grown by ``distance``."""
+    dim = boxes.shape[1] // 2
+    grown = grow_boxes(boxes, distance)
+    a, b = grown[pairs[:, 0]], grown[pairs[:, 1]]
+    return np.all(a[:, :dim] <= b[:, dim:], axis=1) & np.all(b[:, :dim] <= a[:, dim:], axis=1)
+
+
+class KeptCandidates:
+    """The broad phase ``find(boxes, distance)`` with a margin, kept while the vertices stay within it."""
+
+    def __init__(self, find: Callable[[np.ndarray, float], np.ndarray], distance: float, margin: float) -> None:
+        self.find = find
+        self.distance = distance
+        self.margin = margin
+        self.searches = 0  # broad-phase runs (tests and benchmarks read it)
+        self._pairs: np.ndarray | None = None
+        self._reference: np.ndarray | None = None
+
+    def __call__(self, vertices: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+        """The candidate pairs (k, 2), sorted, of the configuration ``vertices`` with block ``boxes``."""
+        ref, pairs = self._reference, self._pairs
+        if ref is None or pairs is None or ref.shape != vertices.shape \
+                or float(np.max(np.abs(vertices - ref))) > 0.5 * self.margin:
+            pairs = self._pairs = self.find(boxes, self.distance + self.margin)
+            self._reference = vertices.copy()
+            self.searches += 1
+        return pairs[boxes_within(boxes, pairs, self.distance)]
