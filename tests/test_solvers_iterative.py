@@ -200,3 +200,21 @@ def test_3d_blocks_of_twelve_unknowns(preconditioner):
     x = ConjugateGradientSolver(preconditioner, 1e-10).solve(system, system.full_rhs())
     exact = SuperLUSolver().solve(system, system.full_rhs())
     assert np.max(np.abs(x - exact)) <= 1e-10  # the tolerance asked for
+
+
+@pytest.mark.parametrize("ndof", [6, 12])
+def test_fused_block_jacobi_update_is_the_whole_array_update(ndof):
+    # BlockJacobi.advance does x += αp, r -= αq, z = M⁻¹r, r·z and max|z| in one pass: the same numbers as
+    # the whole-array operations pcg does otherwise, up to the order of the dot product's sum
+    from srdda.solvers_iterative import BlockJacobi
+    rng = np.random.default_rng(11)
+    blocks = rng.normal(size=(50, ndof, ndof))
+    jacobi = BlockJacobi(blocks @ np.swapaxes(blocks, 1, 2) + ndof * np.eye(ndof))
+    x, r, p, q = (rng.normal(size=50 * ndof) for _ in range(4))
+    alpha = 0.37
+    x_ref, r_ref = x + alpha * p, r - alpha * q
+    z_ref = jacobi(r_ref)
+    z = np.empty_like(r)
+    rz, largest = jacobi.advance(x, r, z, p, q, alpha)
+    assert np.array_equal(x, x_ref) and np.array_equal(r, r_ref) and np.array_equal(z, z_ref)
+    assert rz == pytest.approx(float(r_ref @ z_ref), rel=1e-13) and largest == float(np.abs(z_ref).max())
