@@ -5,7 +5,9 @@ block-diagonal inertia term plus positive semi-definite stiffness and
 penalty terms), so the conjugate gradient applies. Everything here works on
 whole arrays through three callables, ``matvec``, ``precondition`` and the
 array methods ``@``, ``abs``, ``max``, ``copy``: a GPU backend passes CuPy
-arrays and a CuPy sparse matrix and reuses :func:`pcg` as it is.
+arrays and a CuPy sparse matrix and reuses :func:`pcg` as it is. On numpy
+arrays :class:`BlockJacobi` runs as compiled loops and fuses an iteration's
+vector updates (``advance``); the arithmetic is the same.
 
 **Stopping rule** (the displacement tolerance δ, m). With the residual
 r = b - A·x and the preconditioned residual z = M⁻¹·r, the error e = x* - x
@@ -86,7 +88,10 @@ def pcg(matvec: Callable[[Array], Array], precondition: Callable[[Array], Array]
     ``ritz_bound``: an estimate of λ_min(M⁻¹A) known before this solve
     (module doc); ``inf`` when none. Raises :class:`IterativeSolverError`
     when p·A·p ≤ 0 (the matrix or the preconditioner is not positive
-    definite); returns ``converged=False`` after ``max_iterations``.
+    definite); returns ``converged=False`` after ``max_iterations``. A
+    preconditioner with an ``advance(x, r, z, p, q, α)`` method (numpy arrays
+    only) makes the updates x += αp, r -= αq, z = M⁻¹r in one pass and returns
+    (r·z, max|z|).
     """
     x = x0.copy()
     r = b - matvec(x)
