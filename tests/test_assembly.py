@@ -1,5 +1,6 @@
 """The global matrix equals the plain sum of its 6×6 sub-matrices, whatever the storage."""
 import numpy as np
+import pytest
 
 from srdda.assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
 
@@ -103,9 +104,13 @@ def _penalty_by_einsum(system, pairs, factor):
     system.add_off_diagonal(a[~same], b[~same], cross[~same])
 
 
-def test_compiled_penalty_pairs_equal_the_einsum_sums_bit_for_bit():
+@pytest.mark.parametrize("threads", ["serial", "parallel"])
+def test_compiled_penalty_pairs_equal_the_einsum_sums_bit_for_bit(threads, monkeypatch):
     # the paper's rows (the rockfall amplifies a last-bit change to 1e-6) depend on these sums being the
-    # same bits: 1 to 3 rows per spring, 2D and 3D blocks, springs to the ground, within one block, repeated
+    # same bits: 1 to 3 rows per spring, 2D and 3D blocks, springs to the ground, within one block, repeated;
+    # large systems share the blocks among threads (PARALLEL_BLOCKS), each block's sums still in spring order
+    if threads == "parallel":
+        monkeypatch.setattr("srdda.assembly.system.PARALLEL_BLOCKS", 0)
     rng = np.random.default_rng(6)
     for trial in range(60):
         nb, ndof, rows = 6, (6, 12)[trial % 2], 1 + trial % 3

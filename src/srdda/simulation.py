@@ -17,7 +17,7 @@ from .ledger import EnergyWatch, energies
 from .model import Model, ModelArrays
 from .results import Recorder, Result
 from .settings import RunSettings
-from .solvers import get_solver
+from .solvers import blas_threads_for_steps, get_solver
 from .state import State, initial_state
 from .step import Stepper, time_step_advice
 
@@ -51,7 +51,7 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     result = Result(arrays.block_names, stepper.method.name, keep_history)
     sinks: list[Recorder] = [result, *recorders]
 
-    def record(solves: int, energy: dict[str, float]) -> None:
+    def record(state: State, solves: int, energy: dict[str, float]) -> None:
         for sink in sinks:
             sink.record(arrays, state, solves, energy)
 
@@ -59,15 +59,29 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     if advice is not None:
         warnings.warn(advice, TimeStepWarning, stacklevel=2)
     energy = energies(stepper.terms, arrays, state)
-    record(0, energy)
+    record(state, 0, energy)
     # contacts must never create energy; dda0's and dda1's rotation artefacts (the paper's Tables 1-5) do
     watch = EnergyWatch(energy) if any(t.energy_kind == "contact" for t in stepper.terms) else None
+    summary = WarningSummary()
+    with blas_threads_for_steps():
+        status, state = _steps(stepper, settings, state, record, watch, progress, stop, summary)
+    for sink in sinks:
+        sink.finish(status, state)
+    summary.emit()
+    return result
+
+
+def _steps(stepper: Stepper, settings: RunSettings, state: State,
+           record: Callable[[State, int, dict[str, float]], None],
+           watch: EnergyWatch | None, progress: Callable[[int], None] | None, stop: Callable[[State], bool] | None,
+           summary: WarningSummary) -> tuple[str, State]:
+    """The steps of :func:`run`: returns (status, last accepted state)."""
+    arrays = stepper.arrays
     last_step = state.step + settings.last_step_limit
     end_time = settings.end_time
     min_dt = settings.min_dt if settings.min_dt is not None else 1e-6 * settings.dt
     status = "completed"
     dt = state.dt_next if state.dt_next is not None else settings.dt
-    summary = WarningSummary()
     while state.step < last_step and (end_time is None or not _reached(state.time, end_time, settings.dt)):
         step_dt = dt if end_time is None else min(dt, end_time - state.time)
         with summary.collect(state.step + 1):
@@ -93,15 +107,12 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
             if created is not None:
                 warnings.warn(created, EnergyWarning, stacklevel=2)
             if recorded:
-                record(outcome.solves, energy)
+                record(state, outcome.solves, energy)
         if progress is not None:
             progress(state.step)
         if stopped:
             break
-    for sink in sinks:
-        sink.finish(status, state)
-    summary.emit()
-    return result
+    return status, state
 
 
 class WarningSummary:

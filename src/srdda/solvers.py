@@ -36,6 +36,7 @@ See docs/constraints.md.
 from __future__ import annotations
 
 import importlib.util
+import os
 import warnings
 from collections.abc import Callable
 from dataclasses import replace
@@ -45,13 +46,14 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from threadpoolctl import threadpool_limits
 
 from .assembly.system import BlockSystem
-from .solvers_iterative import (BlockJacobi, IterativeSolverError, PCGResult, SmoothedAggregation, pcg,
-                                smallest_eigenvalue_estimate)
+from .solvers_iterative import (BlockJacobi, IterativeSolverError, PCGResult, SmoothedAggregation, block_jacobi_pcg,
+                                pcg, smallest_eigenvalue_estimate)
 
-__all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "DENSE_LIMIT", "ITERATIVE_LIMIT",
-           "DEFAULT_TOLERANCE", "SOLVERS"]
+__all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "blas_threads_for_steps", "DENSE_LIMIT",
+           "ITERATIVE_LIMIT", "DEFAULT_TOLERANCE", "SOLVERS"]
 
 DENSE_LIMIT = 120  # unknowns: LAPACK on the dense matrix up to here (20 blocks in 2D)
 ITERATIVE_LIMIT = 500  # blocks: ``auto`` uses a direct factorisation up to here, the conjugate gradient above
@@ -279,8 +281,11 @@ class CholmodSolver(_Analysing):
         from sksparse.cholmod import CholmodError
 
         try:
-            self._factor.cholesky_inplace(sp.csc_matrix((matrix.data, matrix.indices, matrix.indptr),
-                                                        shape=matrix.shape))
+            # the supernodal factorisation is the one BLAS work of a step that threads speed up (a run
+            # otherwise holds BLAS to one thread, :func:`blas_threads_for_steps`)
+            with threadpool_limits(limits=os.cpu_count(), user_api="blas"):
+                self._factor.cholesky_inplace(sp.csc_matrix((matrix.data, matrix.indices, matrix.indptr),
+                                                            shape=matrix.shape))
         except CholmodError as exc:
             raise SolverError(f"CHOLMOD failed: {exc}") from exc
         return self._factor
@@ -373,8 +378,8 @@ class ConjugateGradientSolver:
     def _pcg(self, system: BlockSystem, matrix: sp.bsr_matrix, rhs: np.ndarray, x0: np.ndarray) -> PCGResult:
         if self.preconditioner == "jacobi":
             self.setups += 1
-            return pcg(matrix.__matmul__, BlockJacobi(system.diag), rhs, x0, self.tolerance, self.MAX_ITERATIONS,
-                       self._ritz)
+            return block_jacobi_pcg(matrix, BlockJacobi(system.diag), rhs, x0, self.tolerance, self.MAX_ITERATIONS,
+                                    self._ritz)
         if self._amg is not None and self._amg.hierarchy.levels[0].A.shape == matrix.shape:
             first = pcg(matrix.__matmul__, self._amg, rhs, x0, self.tolerance, self.REBUILD_ITERATIONS, self._ritz)
             if first.converged:
@@ -408,6 +413,19 @@ class ConjugateGradientSolver:
         self.iterations.append(result.iterations)
         self._x = result.x.copy()
         return _check(result.x)
+
+
+def blas_threads_for_steps() -> threadpool_limits:
+    """A context that holds BLAS (OpenBLAS, MKL) to one thread while a run steps.
+
+    The step's BLAS work is numpy's stacked products of 6×6 and 12×12 blocks,
+    which take the same wall time on one thread as on two; the idle BLAS
+    threads spin after each call and take the cores from the compiled
+    parallel conjugate gradient (the 10,000-brick wall's solves took 2.8
+    times longer, docs/performance.md). CHOLMOD's factorisation lifts the
+    limit for itself.
+    """
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 def _best_direct() -> LinearSolver:

@@ -6,8 +6,9 @@ penalty terms), so the conjugate gradient applies. Everything here works on
 whole arrays through three callables, ``matvec``, ``precondition`` and the
 array methods ``@``, ``abs``, ``max``, ``copy``: a GPU backend passes CuPy
 arrays and a CuPy sparse matrix and reuses :func:`pcg` as it is. On numpy
-arrays :class:`BlockJacobi` runs as compiled loops and fuses an iteration's
-vector updates (``advance``); the arithmetic is the same.
+arrays :func:`block_jacobi_pcg` runs the same iteration with block-Jacobi as
+one compiled loop on all cores; the arithmetic is the same, summed in
+another order.
 
 **Stopping rule** (the displacement tolerance δ, m). With the residual
 r = b - A·x and the preconditioned residual z = M⁻¹·r, the error e = x* - x
@@ -39,9 +40,9 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-from numba import njit
+from numba import njit, prange
 
-__all__ = ["PCGResult", "IterativeSolverError", "pcg", "smallest_eigenvalue_estimate", "BlockJacobi",
+__all__ = ["PCGResult", "IterativeSolverError", "pcg", "block_jacobi_pcg", "smallest_eigenvalue_estimate", "BlockJacobi",
            "SmoothedAggregation", "block_modes"]
 
 Array = Any  # numpy.ndarray, or cupy.ndarray for a GPU backend
@@ -81,6 +82,25 @@ def _smallest_ritz(alphas: list[float], betas: list[float]) -> float:
     return float(sla.eigvalsh_tridiagonal(diag, off, select="i", select_range=(0, 0))[0])
 
 
+def _converged(rz: float, error: float, tolerance: float, theta: float, k: int,
+               ritz: Callable[[], float]) -> tuple[bool, float]:
+    """The test at the top of CG iteration k: (converged, θ); raises on a non-finite or negative r·z.
+
+    ``error`` is max|z|; ``ritz()`` the smallest Ritz value of the run so far,
+    computed only when the cheap bound with the current θ is met (θ only
+    decreases).
+    """
+    if not np.isfinite(rz):
+        raise IterativeSolverError(f"the conjugate gradient produced non-finite values at iteration {k}")
+    if rz < 0.0:
+        raise IterativeSolverError("the preconditioner is not positive definite (r·M⁻¹r < 0)")
+    if error == 0.0:
+        return True, theta
+    if k and error <= tolerance * theta:
+        theta = min(theta, ritz())
+    return bool(np.isfinite(theta) and error <= tolerance * theta), theta
+
+
 def pcg(matvec: Callable[[Array], Array], precondition: Callable[[Array], Array], b: Array, x0: Array,
         tolerance: float, max_iterations: int, ritz_bound: float = np.inf) -> PCGResult:
     """Solve A·x = b by the preconditioned conjugate gradient from ``x0``, to the displacement ``tolerance``.
@@ -88,32 +108,20 @@ def pcg(matvec: Callable[[Array], Array], precondition: Callable[[Array], Array]
     ``ritz_bound``: an estimate of λ_min(M⁻¹A) known before this solve
     (module doc); ``inf`` when none. Raises :class:`IterativeSolverError`
     when p·A·p ≤ 0 (the matrix or the preconditioner is not positive
-    definite); returns ``converged=False`` after ``max_iterations``. A
-    preconditioner with an ``advance(x, r, z, p, q, α)`` method (numpy arrays
-    only) makes the updates x += αp, r -= αq, z = M⁻¹r in one pass and returns
-    (r·z, max|z|).
+    definite); returns ``converged=False`` after ``max_iterations``.
     """
     x = x0.copy()
     r = b - matvec(x)
     z = precondition(r)
     rz = float(r @ z)
     error = float(abs(z).max())
-    # a preconditioner may fuse the vector updates of an iteration into one pass (BlockJacobi.advance)
-    advance = getattr(precondition, "advance", None) if isinstance(b, np.ndarray) else None
     alphas: list[float] = []
     betas: list[float] = [0.0]
     theta = ritz_bound
     p = z.copy()
     for k in range(max_iterations + 1):
-        if not np.isfinite(rz):
-            raise IterativeSolverError(f"the conjugate gradient produced non-finite values at iteration {k}")
-        if rz < 0.0:
-            raise IterativeSolverError("the preconditioner is not positive definite (r·M⁻¹r < 0)")
-        if error == 0.0:
-            return PCGResult(x, k, 0.0, theta)
-        if alphas and error <= tolerance * theta:  # θ only decreases: test the cheap bound first
-            theta = min(theta, _smallest_ritz(alphas, betas))
-        if np.isfinite(theta) and error <= tolerance * theta:
+        done, theta = _converged(rz, error, tolerance, theta, k, lambda: _smallest_ritz(alphas, betas))
+        if done:
             return PCGResult(x, k, error, theta)
         if k == max_iterations:
             break
@@ -123,14 +131,11 @@ def pcg(matvec: Callable[[Array], Array], precondition: Callable[[Array], Array]
             raise IterativeSolverError(f"the matrix is not positive definite (p·A·p = {pq:.3g} at iteration {k}): "
                                        "the conjugate gradient needs a symmetric positive definite system")
         alpha = rz / pq
-        if advance is not None:
-            rz_next, error = advance(x, r, z, p, q, alpha)
-        else:
-            x += alpha * p
-            r -= alpha * q
-            z = precondition(r)
-            rz_next = float(r @ z)
-            error = float(abs(z).max())
+        x += alpha * p
+        r -= alpha * q
+        z = precondition(r)
+        rz_next = float(r @ z)
+        error = float(abs(z).max())
         beta = rz_next / rz
         alphas.append(alpha)
         betas.append(beta)
@@ -166,26 +171,160 @@ def _block_products(inverse: np.ndarray, r: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
-def _advance(inverse: np.ndarray, x: np.ndarray, r: np.ndarray, z: np.ndarray, p: np.ndarray, q: np.ndarray,
-             alpha: float) -> tuple[float, float]:
-    """One CG update in one pass: x += αp, r -= αq, z = M⁻¹r (block-Jacobi); returns r·z and max|z|."""
-    n, ndof, _ = inverse.shape
-    rz = 0.0
-    largest = 0.0
-    for i in range(n):
-        base = i * ndof
-        for a in range(ndof):
-            x[base + a] += alpha * p[base + a]
-            r[base + a] -= alpha * q[base + a]
-        for a in range(ndof):
-            acc = 0.0
-            for c in range(ndof):
-                acc += inverse[i, a, c] * r[base + c]
-            z[base + a] = acc
-            rz += r[base + a] * acc
-            largest = max(largest, abs(acc))
-    return rz, largest
+@njit(parallel=True, cache=True)
+def _bsr_product(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, x: np.ndarray, y: np.ndarray,
+                 width: tuple[float, ...]) -> None:
+    """y = A·x for a BSR matrix of square blocks of ``len(width)`` rows, a block row per thread.
+
+    The block size is the length of the tuple ``width`` so that it is known when compiling: the
+    loops over a block unroll and the row sums stay in registers (2.6 times scipy's BSR product on
+    two threads, 1.3 times on one, docs/performance.md). No two threads write the same entry.
+    """
+    size = len(width)
+    for i in prange(len(indptr) - 1):
+        acc = np.zeros(size)
+        for k in range(indptr[i], indptr[i + 1]):
+            j = indices[k] * size
+            for a in range(size):
+                s = 0.0
+                for c in range(size):
+                    s += data[k, a, c] * x[j + c]
+                acc[a] += s
+        for a in range(size):
+            y[i * size + a] = acc[a]
+
+
+@njit(parallel=True, cache=True)
+def _pcg_iterations(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, inverse: np.ndarray, x: np.ndarray,
+                    r: np.ndarray, z: np.ndarray, p: np.ndarray, q: np.ndarray, k: int, rz: float, error: float,
+                    threshold: float, max_iterations: int, alphas: np.ndarray, betas: np.ndarray,
+                    width: tuple[float, ...]) -> tuple[int, float, float, float]:
+    """Block-Jacobi CG iterations from iteration ``k`` until max|z| ≤ ``threshold``, ``max_iterations`` or a failure.
+
+    The same arithmetic as :func:`pcg` (q = A·p, α = r·z / p·q, x += αp,
+    r -= αq, z = M⁻¹r, β, p = z + βp), each pass parallel over block rows;
+    records α and β for the Ritz value. Returns (k, r·z, max|z|, p·q): p·q ≤ 0
+    or a non-finite or negative r·z stops it for the caller to report.
+    """
+    size = len(width)
+    n = len(indptr) - 1
+    pq = 1.0
+    while k < max_iterations:
+        _bsr_product(indptr, indices, data, p, q, width)
+        pq = 0.0
+        for i in prange(len(p)):
+            pq += p[i] * q[i]
+        if not pq > 0.0:
+            break
+        alpha = rz / pq
+        rz_next = 0.0
+        largest = 0.0
+        for i in prange(n):
+            base = i * size
+            for a in range(size):
+                x[base + a] += alpha * p[base + a]
+                r[base + a] -= alpha * q[base + a]
+            for a in range(size):
+                s = 0.0
+                for c in range(size):
+                    s += inverse[i, a, c] * r[base + c]
+                z[base + a] = s
+                rz_next += r[base + a] * s
+                largest = max(largest, abs(s))
+        beta = rz_next / rz
+        alphas[k] = alpha
+        betas[k + 1] = beta
+        k += 1
+        rz = rz_next
+        error = largest
+        for i in prange(len(p)):
+            p[i] = z[i] + beta * p[i]
+        if not (np.isfinite(rz) and rz >= 0.0) or error <= threshold:
+            break
+    return k, rz, error, pq
+
+
+def block_jacobi_pcg(matrix: sp.bsr_matrix, preconditioner: BlockJacobi, b: np.ndarray, x0: np.ndarray,
+                     tolerance: float, max_iterations: int, ritz_bound: float = np.inf) -> PCGResult:
+    """:func:`pcg` with block-Jacobi on a numpy BSR matrix, its iterations one compiled parallel loop.
+
+    The same iteration, stopping rule and errors as :func:`pcg` (the sums
+    are in another order, so the iterates agree to round-off, not bit for
+    bit); Python only computes the Ritz value when the cheap bound is met.
+    """
+    width = (0.0,) * matrix.blocksize[0]
+    indptr, indices, data = matrix.indptr, matrix.indices, matrix.data
+    x = np.array(x0, dtype=float)
+    r = np.empty_like(x)
+    _bsr_product(indptr, indices, data, x, r, width)
+    r = b - r
+    z = preconditioner(r)
+    rz = float(r @ z)
+    error = float(np.abs(z).max()) if len(z) else 0.0
+    p, q = z.copy(), np.empty_like(x)
+    alphas, betas = np.empty(max_iterations), np.zeros(max_iterations + 1)
+    theta, k = ritz_bound, 0
+    while True:
+        done, theta = _converged(rz, error, tolerance, theta, k, lambda: _smallest_ritz(alphas[:k], betas))
+        if done:
+            return PCGResult(x, k, error, theta)
+        if k == max_iterations:
+            break
+        k, rz, error, pq = _pcg_iterations(indptr, indices, data, preconditioner.inverse, x, r, z, p, q, k, rz,
+                                           error, tolerance * theta, max_iterations, alphas, betas, width)
+        if not pq > 0.0:
+            raise IterativeSolverError(f"the matrix is not positive definite (p·A·p = {pq:.3g} at iteration {k}): "
+                                       "the conjugate gradient needs a symmetric positive definite system")
+    return PCGResult(x, max_iterations, error, min(theta, _smallest_ritz(alphas[:k], betas)) if k else theta,
+                     converged=False)
+
+
+@njit(parallel=True, cache=True)
+def _spd_inverses(diag: np.ndarray, out: np.ndarray, width: tuple[float, ...]) -> int:
+    """``out[b]`` = diag[b]⁻¹ by Cholesky (diag[b] = L·Lᵀ, inverse L⁻ᵀ·L⁻¹, exactly symmetric), a block per thread.
+
+    Reads the lower triangles. Returns the first block that is not positive
+    definite (a pivot ≤ 0 or not a number, as LAPACK's potrf), or the number
+    of blocks when all are. 24 times numpy's cholesky and inv on 10,000 6×6
+    blocks (docs/performance.md).
+    """
+    size = len(width)
+    failed = diag.shape[0]
+    for b in prange(diag.shape[0]):
+        low = np.zeros((size, size))
+        inv = np.zeros((size, size))
+        ok = True
+        for j in range(size):
+            s = diag[b, j, j]
+            for k in range(j):
+                s -= low[j, k] * low[j, k]
+            if not s > 0.0:
+                ok = False
+                break
+            low[j, j] = np.sqrt(s)
+            for i in range(j + 1, size):
+                t = diag[b, i, j]
+                for k in range(j):
+                    t -= low[i, k] * low[j, k]
+                low[i, j] = t / low[j, j]
+        if not ok:
+            failed = min(failed, b)
+            continue
+        for j in range(size):  # L⁻¹, column by column
+            inv[j, j] = 1.0 / low[j, j]
+            for i in range(j + 1, size):
+                t = 0.0
+                for k in range(j, i):
+                    t -= low[i, k] * inv[k, j]
+                inv[i, j] = t / low[i, i]
+        for a in range(size):
+            for c in range(a + 1):
+                t = 0.0
+                for k in range(a, size):
+                    t += inv[k, a] * inv[k, c]
+                out[b, a, c] = t
+                out[b, c, a] = t
+    return failed
 
 
 class BlockJacobi:
@@ -197,28 +336,18 @@ class BlockJacobi:
     """
 
     def __init__(self, diag: np.ndarray) -> None:
-        try:
-            np.linalg.cholesky(diag)  # a principal sub-matrix of an SPD matrix is SPD
-        except np.linalg.LinAlgError as exc:
-            raise IterativeSolverError("a diagonal block of the matrix is not positive definite: "
-                                       "the conjugate gradient needs a symmetric positive definite system") from exc
-        self.inverse = np.linalg.inv(diag)
         self.ndof = diag.shape[1]
+        self.inverse = np.empty_like(diag, dtype=np.float64)
+        # a principal sub-matrix of an SPD matrix is SPD: a block that is not shows the matrix is not
+        failed = _spd_inverses(np.ascontiguousarray(diag, dtype=np.float64), self.inverse, (0.0,) * self.ndof)
+        if failed < len(diag):
+            raise IterativeSolverError(f"diagonal block {failed} of the matrix is not positive definite: "
+                                       "the conjugate gradient needs a symmetric positive definite system")
 
     def __call__(self, r: Array) -> Array:
         if isinstance(r, np.ndarray):
             return _block_products(self.inverse, r)
         return (self.inverse @ r.reshape(-1, self.ndof, 1)).reshape(-1)
-
-    def advance(self, x: np.ndarray, r: np.ndarray, z: np.ndarray, p: np.ndarray, q: np.ndarray,
-                alpha: float) -> tuple[float, float]:
-        """x += αp, r -= αq and z = M⁻¹r in place, in one compiled pass; returns (r·z, max|z|).
-
-        What :func:`pcg` does with whole-array operations, fused: on the
-        1,000-block slope the eight array operations of an iteration cost as
-        much as the matrix product (docs/performance.md).
-        """
-        return _advance(self.inverse, x, r, z, p, q, alpha)
 
 
 def block_modes(n_blocks: int, ndof: int) -> np.ndarray:
