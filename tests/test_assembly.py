@@ -64,11 +64,13 @@ def test_scatter_add_is_np_add_at_bit_for_bit():
         assert np.array_equal(got, expected)
 
 
-def test_block_sums_are_np_add_reduceat_bit_for_bit():
+@pytest.mark.parametrize("threads", ["serial", "parallel"])
+def test_block_sums_are_np_add_reduceat_bit_for_bit(threads):
     # to_bsr sums each (i, j) block's contributions in numpy's own order (the first, then the pairwise sum
     # of the rest), so the matrix has the bits of the np.add.reduceat it replaced; segment lengths cross
-    # numpy's unrolled (8) and blocked (128) pairwise thresholds; a third of the blocks are read transposed
-    from srdda.assembly.system import _segment_sums
+    # numpy's unrolled (8) and blocked (128) pairwise thresholds; a third of the blocks are read transposed;
+    # large systems share the segments among threads, each still summed in that order
+    from srdda.assembly.system import _segment_sums, _segment_sums_parallel
     rng = np.random.default_rng(4)
     lengths = np.concatenate([rng.integers(1, 12, 400), [8, 9, 10, 16, 17, 128, 129, 130, 257, 1000]])
     total = int(lengths.sum())
@@ -79,7 +81,8 @@ def test_block_sums_are_np_add_reduceat_bit_for_bit():
     entries = np.arange(36)
     layouts = np.stack([entries, entries.reshape(6, 6).T.ravel()])
     got = np.empty((len(first), 36))
-    _segment_sums(blocks.reshape(total, 36), order, flip, layouts, first, got)
+    sums = _segment_sums if threads == "serial" else _segment_sums_parallel
+    sums(blocks.reshape(total, 36), order, flip, layouts, first, got)
     sorted_blocks = blocks[order]
     sorted_blocks[flip == 1] = np.swapaxes(sorted_blocks[flip == 1], 1, 2)
     assert np.array_equal(got, np.add.reduceat(sorted_blocks, first, axis=0).reshape(len(first), 36))

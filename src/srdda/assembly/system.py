@@ -68,9 +68,10 @@ def _pairwise_sum(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layou
 
 
 @njit(cache=True)
-def _segment_sums(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray, first: np.ndarray,
-                  out: np.ndarray) -> None:
-    """``out[s]``: the sum of the blocks at sorted positions first[s]..first[s+1], as np.add.reduceat sums them.
+def _segment_sums_of(start: int, stop: int, blocks: np.ndarray, order: np.ndarray, flip: np.ndarray,
+                     layouts: np.ndarray, first: np.ndarray, out: np.ndarray) -> None:
+    """``out[s]`` for segments start <= s < stop: the sum of the blocks at sorted positions
+    first[s]..first[s+1], as np.add.reduceat sums them.
 
     The block at sorted position p is row ``order[p]`` of ``blocks`` (n, ndof²)
     read through ``layouts[flip[p]]`` (``layouts`` (2, ndof²): the entries in
@@ -81,7 +82,7 @@ def _segment_sums(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layou
     """
     width = blocks.shape[1]
     rest = np.empty(width)
-    for s in range(first.shape[0]):
+    for s in range(start, stop):
         lo = first[s]
         hi = first[s + 1] if s + 1 < first.shape[0] else order.shape[0]
         head = order[lo]
@@ -102,6 +103,23 @@ def _segment_sums(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layou
             for j in range(width):
                 rest_sum = _pairwise_sum(blocks, order, flip, layouts, lo + 1, hi - lo - 1, j)
                 out[s, j] = blocks[head, layouts[flip[lo], j]] + rest_sum
+
+
+@njit(cache=True)
+def _segment_sums(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray, first: np.ndarray,
+                  out: np.ndarray) -> None:
+    """:func:`_segment_sums_of` every segment, on one thread."""
+    _segment_sums_of(0, first.shape[0], blocks, order, flip, layouts, first, out)
+
+
+@njit(parallel=True, cache=True)
+def _segment_sums_parallel(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray,
+                           first: np.ndarray, out: np.ndarray) -> None:
+    """:func:`_segment_sums` with chunks of 256 segments shared among threads (each segment is one
+    thread's: the same bits)."""
+    n = first.shape[0]
+    for chunk in prange((n + 255) // 256):
+        _segment_sums_of(256 * chunk, min(256 * chunk + 256, n), blocks, order, flip, layouts, first, out)
 
 
 def scatter_add(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
@@ -306,9 +324,10 @@ class BlockSystem:
         entries = np.arange(self.ndof * self.ndof)
         layouts = np.stack([entries, entries.reshape(self.ndof, self.ndof).T.ravel()])
         data = np.empty((len(first), self.ndof, self.ndof))
-        _segment_sums(blocks, np.concatenate([np.arange(nb), source[free]])[order],
-                      np.concatenate([np.zeros(nb, dtype=np.int8), flip[free]])[order], layouts, first,
-                      data.reshape(len(first), -1))
+        sums = _segment_sums_parallel if nb > PARALLEL_BLOCKS else _segment_sums
+        sums(blocks, np.concatenate([np.arange(nb), source[free]])[order],
+             np.concatenate([np.zeros(nb, dtype=np.int8), flip[free]])[order], layouts, first,
+             data.reshape(len(first), -1))
         rows, cols = np.divmod(key[first], nb)
         indptr = np.searchsorted(rows, np.arange(nb + 1))
         return sp.bsr_matrix((data, cols, indptr), shape=(n, n))
