@@ -120,6 +120,35 @@ def test_contact_transfer_keeps_reference_state_and_bond():
     assert not np.any(fresh.bonded)
 
 
+def test_a_sliding_contact_that_came_to_rest_starts_the_next_step_locked():
+    # a sliding contact keeps sliding until its slip reverses (Shi); one that slid less than Shi's band f0·w0
+    # in the last step is at rest: it starts the next step locked with an unstretched spring, instead of
+    # keeping a full friction force in a direction it no longer moves (docs/contacts.md, "Contacts at rest
+    # start locked"); the slip is what commit() stores for a sliding contact
+    m = srdda.Model(allow_overlap=True)
+    m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
+    m.add_block([[-2, -1], [2, -1], [2, 0], [-2, 0]], "rock")
+    m.add_block([[0, -1e-4], [1, -1e-4], [1, 1], [0, 1]], "rock")
+    arrays = m.arrays()
+    band = 1e-6  # f0·w0 (m)
+    cm = ContactModel(arrays, ContactParameters(1e9, 4e8, 0.05, np.radians(3.0), 0.02, tolerance=band))
+    found = cm.prepare(arrays.vertices, None, first_step=True).found
+    slid = np.array([0.5 * band, -5.0 * band])  # the first within the band, the second clearly sliding
+    previous = ContactSet(found[:, 0], found[:, 1], found[:, 2], np.array([SLIDING, SLIDING], dtype=np.int8),
+                          np.array([1, -1], dtype=np.int8), np.array([0.123, 0.456]), np.array([False, False]),
+                          np.array([7.0, 8.0]), np.zeros(2), slid, 0.0)
+    term = cm.prepare(arrays.vertices, previous, first_step=False)
+    assert term.state.tolist() == [LOCKED, SLIDING] and term.sign.tolist() == [0, -1]
+    assert term.reference[0] == pytest.approx(term.geometry.projection[0])  # unstretched: no stored force
+    assert term.shear0[0] == pytest.approx(0.0, abs=1e-15)
+    # the step's slip is what an accepted step commits for a sliding contact (its spring's stretch when locked)
+    step = cm.prepare(arrays.vertices, None, first_step=False)
+    step.state[:] = SLIDING
+    step.shear = step.shear0 + np.array([3e-7, -2e-6])
+    committed = step.commit()
+    assert committed.shear == pytest.approx([3e-7, -2e-6], abs=1e-15)
+
+
 def test_rockfall_model_file_is_the_builder_model():
     from srdda.io.modelfile import load_model
     from srdda.paper import examples_dir

@@ -63,7 +63,7 @@ class ContactSet:
     bonded: np.ndarray  # (n,) cohesion and tensile strength still act
     normal_force: np.ndarray  # (n,) N (compression positive)
     gap: np.ndarray  # (n,) end-of-step normal gap (negative: penetration)
-    shear: np.ndarray  # (n,) end-of-step shear spring displacement
+    shear: np.ndarray  # (n,) end-of-step shear spring displacement (locked); the step's slip (sliding)
     energy: float  # J per m: ½k_n g_n² (closed) + ½k_s s² (locked)
 
     @staticmethod
@@ -243,10 +243,11 @@ class ContactStep:
         energy = self.stored_energy()
         self.state = np.where(self._held_in_band(), OPEN, self.state).astype(np.int8)
         locked = self.state == LOCKED
+        slip = np.where(self.state == SLIDING, self.shear - self.shear0, 0.0)  # for the next step's start
         found = self.found
         return ContactSet(found[:, FOUND_VERTEX], found[:, FOUND_EDGE], found[:, FOUND_KIND], self.state.copy(),
                           self.sign.copy(), self.reference.copy(), self.bonded & locked, self.normal_force.copy(),
-                          self.gap.copy(), np.where(locked, self.shear, 0.0), energy)
+                          self.gap.copy(), np.where(locked, self.shear, slip), energy)
 
     @property
     def max_penetration(self) -> float:
@@ -353,6 +354,15 @@ class ContactModel:
         # one held sliding without friction (its slip reversed, see ContactStep.converged) locks
         # again, unstretched: the slip reversal locks a contact (Shi 1988)
         state[(state == SLIDING) & (sign == 0)] = LOCKED
+        # one that slid less than Shi's band f0·w0 in the last step starts locked, unstretched: at rest
+        # it would keep a full friction force in a direction it no longer moves, and the iteration on
+        # that force's normal force, not a state change, would set the step's solves (docs/contacts.md,
+        # "Contacts at rest start locked"); still driven past its strength, it slips again at the first solve
+        slip = np.zeros(len(found))
+        slip[kept] = previous.shear[src]
+        at_rest = (state == SLIDING) & (np.abs(slip) <= self.params.tolerance) & (self.params.tolerance > 0.0)
+        state[at_rest] = LOCKED
+        sign[at_rest] = 0
         # a new, sliding or open contact starts its shear spring unstretched: the reference is the
         # projection of v on the edge's line, beyond the edge's end for a vertex-vertex contact
         # (clipped to the end, a new locked spring would start stretched by up to d0)
