@@ -110,7 +110,7 @@ class RunSettings:
     open_close_tolerance: Annotated[Ratio, Field(ge=0, le=1e-3)] = 2e-7  # Shi's f0: open-close lengths / w0
     open_close_force_tolerance: Annotated[Ratio, Field(ge=0, le=1e-2)] = 1e-4  # negligible state change / block force
     open_close_freeze_after: Annotated[int, Field(ge=1)] = 2  # state changes of one contact before it is held
-    open_close_settle_after: Annotated[int, Field(ge=1)] = 8  # solves after which contacts may only settle
+    open_close_settle_after: Annotated[int, Field(ge=1)] = 4  # solves after which contacts may only settle
     step_cut_factor: Annotated[Ratio, Field(gt=0, le=MAX_STEP_CUT_FACTOR)] = 1.0 / 3.0  # Δt ← factor·Δt
     min_dt: Annotated[Seconds | None, Field(gt=0)] = None  # the run stops below this; None: 1e-6 × dt
 

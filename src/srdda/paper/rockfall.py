@@ -87,7 +87,7 @@ def build(method: str) -> tuple[Model, RunSettings]:
     model.add_measured_point([cx + w / 2, cy - h / 2], block=1)  # P2, a vertex
     settings = RunSettings(dt=DT, n_steps=N_STEPS, method=method, rho_inf=1.0, penalty=50.0 * E,
                            max_displacement_ratio=0.001, open_close_tolerance=0.0,
-                           open_close_force_tolerance=0.0)
+                           open_close_force_tolerance=0.0, open_close_settle_after=8)
     return model, settings
 
 
