@@ -42,8 +42,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from numba import njit, prange
 
-__all__ = ["PCGResult", "IterativeSolverError", "pcg", "block_jacobi_pcg", "smallest_eigenvalue_estimate", "BlockJacobi",
-           "SmoothedAggregation", "block_modes"]
+__all__ = ["PCGResult", "IterativeSolverError", "pcg", "block_jacobi_pcg", "smallest_eigenvalue_estimate",
+           "BlockJacobi", "SmoothedAggregation", "block_modes"]
 
 Array = Any  # numpy.ndarray, or cupy.ndarray for a GPU backend
 
@@ -281,7 +281,9 @@ def block_jacobi_pcg(matrix: sp.bsr_matrix, preconditioner: BlockJacobi, b: np.n
 
 @njit(parallel=True, cache=True)
 def _spd_inverses(diag: np.ndarray, out: np.ndarray, width: tuple[float, ...]) -> int:
-    """``out[b]`` = diag[b]⁻¹ by Cholesky (diag[b] = L·Lᵀ, inverse L⁻ᵀ·L⁻¹, exactly symmetric), a block per thread.
+    """``out[b]`` = diag[b]⁻¹ by Cholesky: diag[b] = L·Lᵀ, inverse L⁻ᵀ·L⁻¹ (exactly symmetric).
+
+    A block per thread.
 
     Reads the lower triangles. Returns the first block that is not positive
     definite (a pivot ≤ 0 or not a number, as LAPACK's potrf), or the number

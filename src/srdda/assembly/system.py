@@ -486,7 +486,8 @@ def _penalty_serial(diag: np.ndarray, rhs: np.ndarray, block_a: np.ndarray, bloc
 
 @njit(parallel=True, cache=True)
 def _penalty_parallel(diag: np.ndarray, rhs: np.ndarray, block_a: np.ndarray, block_b: np.ndarray, t_a: np.ndarray,
-                      t_b: np.ndarray, gap: np.ndarray, stiffness: np.ndarray, factor: float, cross: np.ndarray) -> None:
+                      t_b: np.ndarray, gap: np.ndarray, stiffness: np.ndarray, factor: float,
+                      cross: np.ndarray) -> None:
     """:func:`_penalty_serial` with the blocks and the springs shared among threads: each block gathers its
     springs (found by one counting sort) in the same order, so the same bits."""
     first, members = _group_by_block(np.concatenate((block_a, block_b)), diag.shape[0])

@@ -405,9 +405,9 @@ class SolidContactStep:
         p = self.params
         self.closed_this_step |= (self.state == OPEN) & (self.gap < 0)
         state, direction, trial_direction, changed, unsettled = next_states_3d(
-            self.state, self.direction, self.gap, self.shear, self.shear - self.shear0, p.normal_stiffness, p.shear_stiffness, self.tan_phi,
-            self.cohesion_force, self.tension_force, self.closed_this_step, self.friction_normal,
-            p.friction_tolerance)
+            self.state, self.direction, self.gap, self.shear, self.shear - self.shear0, p.normal_stiffness,
+            p.shear_stiffness, self.tan_phi, self.cohesion_force, self.tension_force, self.closed_this_step,
+            self.friction_normal, p.friction_tolerance)
         # as in 2D (srdda.contact.term): a contact that changed state ``freeze_after`` times keeps it,
         # except the changes of ``never_held``; after ``settle_after`` solves every contact is held so
         band = 1e-6 * p.distance
