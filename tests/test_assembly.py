@@ -69,7 +69,8 @@ def test_block_sums_are_np_add_reduceat_bit_for_bit(threads):
     # to_bsr sums each (i, j) block's contributions in numpy's own order (the first, then the pairwise sum
     # of the rest), so the matrix has the bits of the np.add.reduceat it replaced; segment lengths cross
     # numpy's unrolled (8) and blocked (128) pairwise thresholds; a third of the blocks are read transposed;
-    # large systems share the segments among threads, each still summed in that order
+    # large systems share the segments among threads, each still summed in that order; the blocks are read
+    # from two arrays, the diagonal blocks then the stack (to_bsr does not join them)
     from srdda.assembly.system import _segment_sums, _segment_sums_parallel
     rng = np.random.default_rng(4)
     lengths = np.concatenate([rng.integers(1, 12, 400), [8, 9, 10, 16, 17, 128, 129, 130, 257, 1000]])
@@ -82,7 +83,9 @@ def test_block_sums_are_np_add_reduceat_bit_for_bit(threads):
     layouts = np.stack([entries, entries.reshape(6, 6).T.ravel()])
     got = np.empty((len(first), 36))
     sums = _segment_sums if threads == "serial" else _segment_sums_parallel
-    sums(blocks.reshape(total, 36), order, flip, layouts, first, got)
+    split = total // 3
+    flat = blocks.reshape(total, 36)
+    sums(flat[:split], flat[split:], order, flip, layouts, first, got)
     sorted_blocks = blocks[order]
     sorted_blocks[flip == 1] = np.swapaxes(sorted_blocks[flip == 1], 1, 2)
     assert np.array_equal(got, np.add.reduceat(sorted_blocks, first, axis=0).reshape(len(first), 36))
@@ -143,3 +146,21 @@ def test_held_blocks_are_identity_rows_without_couplings():
     naive[rows, rows] = 1.0
     assert np.allclose(system.to_bsr().toarray(), naive, rtol=0, atol=1e-14)
     assert np.allclose(system.to_dense(), naive, rtol=0, atol=1e-14)
+
+
+def test_coupling_blocks_picked_by_which_equal_the_picked_stack_bit_for_bit():
+    # add_off_diagonal(..., which=k) leaves the other blocks of the stack out of the matrix (the open
+    # contacts' zero blocks), without copying the stack: the same matrix as a stack of the picked blocks
+    rng = np.random.default_rng(8)
+    nb, ndof, n = 7, 6, 40
+    bi = rng.integers(0, nb, n)
+    bj = (bi + rng.integers(1, nb, n)) % nb
+    blocks = rng.normal(size=(n, ndof, ndof))
+    which = np.flatnonzero(rng.random(n) < 0.6)
+    diag = rng.normal(size=(nb, ndof, ndof))
+    picked, gathered = (BlockSystem(diag.copy(), np.zeros((nb, ndof))) for _ in range(2))
+    picked.add_off_diagonal(bi, bj, blocks, which=which)
+    gathered.add_off_diagonal(bi[which], bj[which], blocks[which])
+    assert np.array_equal(picked.to_bsr().toarray(), gathered.to_bsr().toarray())
+    assert np.array_equal(picked.to_dense(), gathered.to_dense())
+    assert not np.array_equal(picked.to_dense(), BlockSystem(diag.copy(), np.zeros((nb, ndof))).to_dense())

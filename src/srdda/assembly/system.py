@@ -33,23 +33,30 @@ def _scatter_rows(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> 
 
 
 @njit(cache=True)
-def _pairwise_sum(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray, lo: int, n: int,
-                  j: int) -> float:
+def _entry(diag: np.ndarray, stack: np.ndarray, row: int, j: int) -> float:
+    """Entry j of stored block ``row`` of [diag; stack] (flattened blocks), without joining the two."""
+    n = diag.shape[0]
+    return diag[row, j] if row < n else stack[row - n, j]
+
+
+@njit(cache=True)
+def _pairwise_sum(diag: np.ndarray, stack: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray,
+                  lo: int, n: int, j: int) -> float:
     """numpy's pairwise sum of entry j of the blocks at sorted positions lo..lo+n (its add.reduce order,
     loops_utils.h); ``order``, ``flip`` and ``layouts`` as in :func:`_segment_sums`."""
     if n < 8:
         res = 0.0
         for i in range(n):
-            res += blocks[order[lo + i], layouts[flip[lo + i], j]]
+            res += _entry(diag, stack, order[lo + i], layouts[flip[lo + i], j])
         return res
     if n <= 128:
         r = np.empty(8)
         for m in range(8):
-            r[m] = blocks[order[lo + m], layouts[flip[lo + m], j]]
+            r[m] = _entry(diag, stack, order[lo + m], layouts[flip[lo + m], j])
         i = 8
         while i < n - n % 8:
             for m in range(8):
-                r[m] += blocks[order[lo + i + m], layouts[flip[lo + i + m], j]]
+                r[m] += _entry(diag, stack, order[lo + i + m], layouts[flip[lo + i + m], j])
             i += 8
         width = 1  # the tree ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
         while width < 8:
@@ -58,29 +65,30 @@ def _pairwise_sum(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layou
             width += width
         res = r[0]
         while i < n:
-            res += blocks[order[lo + i], layouts[flip[lo + i], j]]
+            res += _entry(diag, stack, order[lo + i], layouts[flip[lo + i], j])
             i += 1
         return res
     half = n // 2
     half -= half % 8
-    return (_pairwise_sum(blocks, order, flip, layouts, lo, half, j)
-            + _pairwise_sum(blocks, order, flip, layouts, lo + half, n - half, j))
+    return (_pairwise_sum(diag, stack, order, flip, layouts, lo, half, j)
+            + _pairwise_sum(diag, stack, order, flip, layouts, lo + half, n - half, j))
 
 
 @njit(cache=True)
-def _segment_sums_of(start: int, stop: int, blocks: np.ndarray, order: np.ndarray, flip: np.ndarray,
-                     layouts: np.ndarray, first: np.ndarray, out: np.ndarray) -> None:
+def _segment_sums_of(start: int, stop: int, diag: np.ndarray, stack: np.ndarray, order: np.ndarray,
+                     flip: np.ndarray, layouts: np.ndarray, first: np.ndarray, out: np.ndarray) -> None:
     """``out[s]`` for segments start <= s < stop: the sum of the blocks at sorted positions
     first[s]..first[s+1], as np.add.reduceat sums them.
 
-    The block at sorted position p is row ``order[p]`` of ``blocks`` (n, ndof²)
+    The block at sorted position p is row ``order[p]`` of [diag; stack] (n, ndof²),
     read through ``layouts[flip[p]]`` (``layouts`` (2, ndof²): the entries in
-    order, then the transpose's), so no sorted or transposed copy is made. numpy adds a segment's first block to the
-    pairwise sum of the others; short segments (the usual case: a few contacts
+    order, then the transpose's), so no joined, sorted or transposed copy is made. numpy adds a segment's
+    first block to the pairwise sum of the others; short segments (the usual case: a few contacts
     between two blocks) are summed block by block, long ones entry by entry in
     numpy's pairwise order: the same bits as the reduceat it replaced.
     """
-    width = blocks.shape[1]
+    width = diag.shape[1]
+    n_diag = diag.shape[0]
     rest = np.empty(width)
     for s in range(start, stop):
         lo = first[s]
@@ -90,36 +98,38 @@ def _segment_sums_of(start: int, stop: int, blocks: np.ndarray, order: np.ndarra
             rest[:] = 0.0
             for i in range(lo + 1, hi):
                 row = order[i]
+                block = diag[row] if row < n_diag else stack[row - n_diag]
                 if flip[i] == 0:
                     for j in range(width):
-                        rest[j] += blocks[row, j]
+                        rest[j] += block[j]
                 else:
                     for j in range(width):
-                        rest[j] += blocks[row, layouts[1, j]]
+                        rest[j] += block[layouts[1, j]]
+            block = diag[head] if head < n_diag else stack[head - n_diag]
             for j in range(width):
-                value = blocks[head, layouts[flip[lo], j]]
+                value = block[layouts[flip[lo], j]]
                 out[s, j] = value + rest[j] if hi - lo > 1 else value
         else:
             for j in range(width):
-                rest_sum = _pairwise_sum(blocks, order, flip, layouts, lo + 1, hi - lo - 1, j)
-                out[s, j] = blocks[head, layouts[flip[lo], j]] + rest_sum
+                rest_sum = _pairwise_sum(diag, stack, order, flip, layouts, lo + 1, hi - lo - 1, j)
+                out[s, j] = _entry(diag, stack, head, layouts[flip[lo], j]) + rest_sum
 
 
 @njit(cache=True)
-def _segment_sums(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray, first: np.ndarray,
-                  out: np.ndarray) -> None:
+def _segment_sums(diag: np.ndarray, stack: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray,
+                  first: np.ndarray, out: np.ndarray) -> None:
     """:func:`_segment_sums_of` every segment, on one thread."""
-    _segment_sums_of(0, first.shape[0], blocks, order, flip, layouts, first, out)
+    _segment_sums_of(0, first.shape[0], diag, stack, order, flip, layouts, first, out)
 
 
 @njit(parallel=True, cache=True)
-def _segment_sums_parallel(blocks: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray,
-                           first: np.ndarray, out: np.ndarray) -> None:
+def _segment_sums_parallel(diag: np.ndarray, stack: np.ndarray, order: np.ndarray, flip: np.ndarray,
+                           layouts: np.ndarray, first: np.ndarray, out: np.ndarray) -> None:
     """:func:`_segment_sums` with chunks of 256 segments shared among threads (each segment is one
     thread's: the same bits)."""
     n = first.shape[0]
     for chunk in prange((n + 255) // 256):
-        _segment_sums_of(256 * chunk, min(256 * chunk + 256, n), blocks, order, flip, layouts, first, out)
+        _segment_sums_of(256 * chunk, min(256 * chunk + 256, n), diag, stack, order, flip, layouts, first, out)
 
 
 def scatter_add(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
@@ -147,6 +157,7 @@ class BlockSystem:
     pair_i: list[np.ndarray] = field(default_factory=list)
     pair_j: list[np.ndarray] = field(default_factory=list)
     pair_blocks: list[np.ndarray] = field(default_factory=list)
+    pair_which: list[np.ndarray | None] = field(default_factory=list)  # per stack: the blocks used (None: all)
     con_rows: list[np.ndarray] = field(default_factory=list)  # constraint triplets (row, col, value)
     con_cols: list[np.ndarray] = field(default_factory=list)
     con_vals: list[np.ndarray] = field(default_factory=list)
@@ -239,13 +250,19 @@ class BlockSystem:
         rows, cols, vals = self._saddle_triplets()
         return np.bincount(rows * m + cols, weights=vals, minlength=m * m).reshape(m, m)
 
-    def add_off_diagonal(self, bi: np.ndarray, bj: np.ndarray, blocks: np.ndarray) -> None:
-        """Add K_ij blocks (and their transposes at (j, i)); bi != bj required."""
+    def add_off_diagonal(self, bi: np.ndarray, bj: np.ndarray, blocks: np.ndarray,
+                         which: np.ndarray | None = None) -> None:
+        """Add K_ij blocks (and their transposes at (j, i)); bi != bj required.
+
+        ``which``: the indices of the blocks that enter the matrix (None: all);
+        the others are kept in the stack, not copied out of it.
+        """
         if len(bi) == 0:
             return
         self.pair_i.append(bi)
         self.pair_j.append(bj)
         self.pair_blocks.append(blocks)
+        self.pair_which.append(which)
 
     def fix_blocks(self, fixed: np.ndarray) -> None:
         """Hold the blocks where ``fixed`` is True: identity rows, zero rhs, couplings dropped.
@@ -269,12 +286,14 @@ class BlockSystem:
         """
         rows, cols, source, flip = [], [], [], []
         offset = self.n_blocks
-        for bi, bj in zip(self.pair_i, self.pair_j):
-            index = offset + np.arange(len(bi))
-            rows += [bi, bj]
-            cols += [bj, bi]
+        for bi, bj, which in zip(self.pair_i, self.pair_j, self.pair_which):
+            pick = np.arange(len(bi)) if which is None else which
+            a, b = bi[pick], bj[pick]
+            index = offset + pick
+            rows += [a, b]
+            cols += [b, a]
             source += [index, index]
-            flip += [np.zeros(len(bi), dtype=np.int8), np.ones(len(bi), dtype=np.int8)]
+            flip += [np.zeros(len(pick), dtype=np.int8), np.ones(len(pick), dtype=np.int8)]
             offset += len(bi)
         return np.concatenate(rows), np.concatenate(cols), np.concatenate(source), np.concatenate(flip)
 
@@ -319,13 +338,16 @@ class BlockSystem:
         order = np.argsort(key, kind="stable")
         key = key[order]
         first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-        # the sorted blocks as rows of [diag; stacks], read in place or transposed
-        blocks = np.concatenate([self.diag, *self.pair_blocks]).reshape(-1, self.ndof * self.ndof)
+        # the sorted blocks as rows of [diag; stacks], read in place or transposed (one stack: not copied)
+        width = self.ndof * self.ndof
+        stack = self.pair_blocks[0] if len(self.pair_blocks) == 1 else np.concatenate(self.pair_blocks)
+        stack = np.ascontiguousarray(stack).reshape(len(stack), width)
         entries = np.arange(self.ndof * self.ndof)
         layouts = np.stack([entries, entries.reshape(self.ndof, self.ndof).T.ravel()])
         data = np.empty((len(first), self.ndof, self.ndof))
         sums = _segment_sums_parallel if nb > PARALLEL_BLOCKS else _segment_sums
-        sums(blocks, np.concatenate([np.arange(nb), source[free]])[order],
+        sums(np.ascontiguousarray(self.diag).reshape(nb, width), stack,
+             np.concatenate([np.arange(nb), source[free]])[order],
              np.concatenate([np.zeros(nb, dtype=np.int8), flip[free]])[order], layouts, first,
              data.reshape(len(first), -1))
         rows, cols = np.divmod(key[first], nb)

@@ -37,12 +37,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
+from ..assembly.system import BlockSystem, scatter_add
 from ..geometry.polyhedron import PolyhedronMesh
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays, ModelError
 from ..term import LEDGER, StepContext
 from .openclose import LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held
 from .candidates import KeptCandidates
+from .penalty import ContactSprings
 from .polyhedra_broadphase import block_boxes_3d, candidate_pairs_3d
 from .polyhedra_narrowphase import EDGE_EDGE, FOUND_FIELDS, VERTEX_FACE, detect_polyhedra_contacts
 from .term import ContactParameters, ContactTerm, pair_keys
@@ -357,6 +358,7 @@ class SolidContactStep:
         self._shapes: tuple[np.ndarray, ...] | None = None
         self._shapes_theta: np.ndarray | None = None  # the rotation increment the shapes were made with
         self._rows: tuple[np.ndarray, ...] = ()  # n·T and e·T at the shapes (add_to)
+        self._springs: ContactSprings | None = None  # the springs at the shapes (add_to)
 
     def __len__(self) -> int:
         return len(self.state)
@@ -372,18 +374,13 @@ class SolidContactStep:
             # the springs' unit rows n·T and e·T of every contact, whatever its state in the solves
             self._rows = (np.einsum("ni,nij->nj", g.normal, ta), np.einsum("nki,nij->nkj", g.frame, tra),
                           np.einsum("ni,nij->nj", g.normal, tb), np.einsum("nki,nij->nkj", g.frame, trb))
+            normal_a, shear_a, normal_b, shear_b = self._rows
+            self._springs = ContactSprings(a, b, normal_a, normal_b, shear_a, shear_b, g.gap, self.shear0,
+                                           self.params.normal_stiffness, self.params.shear_stiffness)
         ta, tb, tra, trb = self._shapes
-        closed = self.state != OPEN
-        if np.any(closed):
-            locked = (self.state[closed] == LOCKED).astype(float)
-            rn = np.sqrt(self.params.normal_stiffness)
-            rs = np.sqrt(self.params.shear_stiffness) * locked
-            normal_a, shear_a, normal_b, shear_b = (row[closed] for row in self._rows)
-            rows_a = np.concatenate([rn * normal_a[:, None], rs[:, None, None] * shear_a], axis=1)
-            rows_b = np.concatenate([rn * normal_b[:, None], rs[:, None, None] * shear_b], axis=1)
-            gap = np.column_stack([rn * g.gap[closed], rs[:, None] * self.shear0[closed]])
-            add_penalty_pairs(system, PenaltyPairs(a[closed], rows_a, b[closed], rows_b, gap,
-                                                   np.ones(int(closed.sum()))), ctx.coeffs.c_p)
+        # by changes while the shapes stay those of the step (Shi's T at t, not the secant pass's)
+        assert self._springs is not None
+        self._springs.add_to(system, self.state, ctx.coeffs.c_p, by_changes=ctx.theta is None)
         sliding = self.state == SLIDING
         self.applied = np.where(sliding[:, None],
                                 -(self.tan_phi * self.friction_normal)[:, None] * self.direction, 0.0)

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
+from ..assembly.system import BlockSystem, scatter_add
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays
 from ..term import LEDGER, StepContext, StepCut, Term
 from .broadphase import block_boxes, candidate_pairs
@@ -25,17 +25,14 @@ from ..geometry.polygon import previous_vertex_index
 from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts
 from .openclose import (LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held,
                         next_states)
+from .penalty import ContactSprings
 from .springs import ContactGeometry, bond_length, contact_geometry
 from .transfer import contact_keys, match_previous
 
 if TYPE_CHECKING:
     from ..state import State
 
-__all__ = ["ContactParameters", "ContactSet", "ContactStep", "ContactModel", "ContactTerm", "INCREMENTAL_BLOCKS"]
-
-# Systems of more blocks add the contact springs of a solve as changes to the last solve's sums
-# (ContactStep._add_springs_by_changes); smaller ones sum them afresh, bit for bit as before.
-INCREMENTAL_BLOCKS = PARALLEL_BLOCKS
+__all__ = ["ContactParameters", "ContactSet", "ContactStep", "ContactModel", "ContactTerm"]
 
 
 @dataclass(frozen=True)
@@ -112,9 +109,7 @@ class ContactStep:
         self._secant: tuple[np.ndarray, np.ndarray] | None = None  # previous (N used, residual)
         self._shapes: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._shapes_theta: np.ndarray | None = None  # the rotation increment the shapes were made with
-        self._rows: tuple[np.ndarray, ...] = ()  # n·T and t·T at the shapes (add_to)
-        # (diag, rhs, coupling blocks, the states they sum) of _add_springs_by_changes
-        self._sums: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._springs: ContactSprings | None = None  # the springs at the shapes (add_to)
         self._solved_state = state
         self._force_limit: np.ndarray | float = 0.0  # N, per contact: a state change below needs no solve
         # block pairs of the last solve's state changes (for the message of a cut step)
@@ -130,19 +125,19 @@ class ContactStep:
             self._shapes = (ctx.shape_at(a, g.point), ctx.shape_at(b, g.foot),
                             ctx.shape_at(b, g.point_on_edge(self.reference)))
             self._shapes_theta = ctx.theta
-            self._sums = None
             tv, tq, tr = self._shapes
             # the springs' unit rows n·T and t·T of every contact, whatever its state in the solves
-            self._rows = (np.einsum("nk,nki->ni", g.normal, tv), np.einsum("nk,nki->ni", g.tangent, tv),
-                          np.einsum("nk,nki->ni", g.normal, tq), np.einsum("nk,nki->ni", g.tangent, tr))
+            self._springs = ContactSprings(a, b, np.einsum("nk,nki->ni", g.normal, tv),
+                                           np.einsum("nk,nki->ni", g.normal, tq),
+                                           np.einsum("nk,nki->ni", g.tangent, tv)[:, None],
+                                           np.einsum("nk,nki->ni", g.tangent, tr)[:, None], g.gap,
+                                           self.shear0[:, None], self.params.normal_stiffness,
+                                           self.params.shear_stiffness)
         tv, tq, tr = self._shapes
         self._solved_state = self.state.copy()  # the states of this solve's forces (for work)
-        if ctx.theta is None and system.n_blocks > INCREMENTAL_BLOCKS:
-            self._add_springs_by_changes(system, ctx.coeffs.c_p)
-        else:
-            closed = np.flatnonzero(self.state != OPEN)
-            if len(closed):
-                add_penalty_pairs(system, self._springs(closed, self.state, 1.0), ctx.coeffs.c_p)
+        # by changes while the shapes stay those of the step (Shi's T at t, not the secant pass's)
+        assert self._springs is not None
+        self._springs.add_to(system, self.state, ctx.coeffs.c_p, by_changes=ctx.theta is None)
         sliding = self.state == SLIDING
         # friction of this solve along the tangent, on v's block (kept for the ledger: work)
         self.friction = np.where(sliding, -self.sign * self.tan_phi * self.friction_normal, 0.0)
@@ -152,67 +147,6 @@ class ContactStep:
             force = magnitude[:, None] * g.tangent[sliding]
             scatter_add(system.rhs, a[sliding], np.einsum("nki,nk->ni", tv[sliding], force))
             scatter_add(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tq[sliding], force))
-
-    def _springs(self, index: np.ndarray, state: np.ndarray, stiffness: float) -> PenaltyPairs:
-        """The springs of contacts ``index`` in ``state``: normal if closed, shear if locked, none if open.
-
-        Each row is scaled by the square root of its stiffness (k_n, k_s), so the
-        pairs' own ``stiffness`` is 1 (or -1 to take the springs out again).
-        """
-        g = self.geometry
-        p = self.params
-        rn = np.sqrt(p.normal_stiffness) * (state[index] != OPEN)
-        rs = np.sqrt(p.shear_stiffness) * (state[index] == LOCKED)
-        normal_a, shear_a, normal_b, shear_b = (row[index] for row in self._rows)
-        t_a = np.stack([rn[:, None] * normal_a, rs[:, None] * shear_a], axis=1)
-        t_b = np.stack([rn[:, None] * normal_b, rs[:, None] * shear_b], axis=1)
-        gap = np.column_stack([rn * g.gap[index], rs * self.shear0[index]])
-        return PenaltyPairs(g.vertex_block[index], t_a, g.edge_block[index], t_b, gap,
-                            np.full(len(index), stiffness))
-
-    def _spring_part(self, index: np.ndarray, shear: bool, stiffness: np.ndarray) -> PenaltyPairs:
-        """One spring of each contact ``index``, its normal spring or its shear spring, with ``stiffness``
-        (±1: put in or taken out) times the rows' own k_n or k_s."""
-        g = self.geometry
-        p = self.params
-        root = np.sqrt(p.shear_stiffness if shear else p.normal_stiffness)
-        normal_a, shear_a, normal_b, shear_b = self._rows
-        row_a, row_b = (shear_a, shear_b) if shear else (normal_a, normal_b)
-        gap = (self.shear0 if shear else g.gap)[index]
-        return PenaltyPairs(g.vertex_block[index], root * row_a[index, None, :], g.edge_block[index],
-                            root * row_b[index, None, :], root * gap[:, None], stiffness)
-
-    def _add_springs_by_changes(self, system: BlockSystem, c_p: float) -> None:
-        """The springs of the closed contacts, summed at the first solve of the step and then changed by
-        the contacts whose state changed: a normal spring put in or taken out where a contact closed or
-        opened, a shear spring where one locked or slipped.
-
-        Only the closed contacts' coupling blocks go to the matrix: an open
-        contact's zero block would cost every iteration of the solver. The sums
-        differ from a fresh sum in their last bits, which is why only large
-        systems take this path (docs/performance.md, "Only the contacts that
-        changed").
-        """
-        closed = np.flatnonzero(self.state != OPEN)
-        if self._sums is None:
-            sums = BlockSystem.empty(system.n_blocks, system.ndof)
-            cross = np.zeros((len(self.state), system.ndof, system.ndof))
-            if len(closed):
-                add_penalty_pairs(sums, self._springs(closed, self.state, 1.0), c_p)
-                cross[closed] = sums.pair_blocks[0]
-            self._sums = (sums.diag, sums.rhs, cross, self.state.copy())
-        diag, rhs, cross, summed_state = self._sums
-        change = BlockSystem(diag, rhs)
-        for shear, part in ((False, lambda s: s != OPEN), (True, lambda s: s == LOCKED)):
-            now = part(self.state)
-            flipped = np.flatnonzero(now != part(summed_state))
-            if len(flipped):
-                add_penalty_pairs(change, self._spring_part(flipped, shear, np.where(now[flipped], 1.0, -1.0)), c_p)
-                cross[flipped] += change.pair_blocks[-1]
-        summed_state[:] = self.state
-        system.diag += diag
-        system.rhs += rhs
-        system.add_off_diagonal(self.geometry.vertex_block[closed], self.geometry.edge_block[closed], cross[closed])
 
     def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         assert self._shapes is not None

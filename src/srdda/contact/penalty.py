@@ -1,0 +1,103 @@
+"""The penalty springs of a step's contacts, 2D and 3D, summed into the step's system.
+
+A closed contact has a normal spring of stiffness k_n on its gap
+g_n = g_0 + n·(T_a Δd_a - T_b Δd_b), a locked one also a shear spring of k_s
+on each of its shear components (one in 2D, two in 3D; Shi 1988, ch. 4;
+docs/contacts.md, docs/contacts-3d.md). :class:`ContactSprings` holds the
+springs' unit rows for one step's shapes and adds the springs of the
+contacts' current states to a solve's system, either
+
+* afresh in every solve (systems of at most ``INCREMENTAL_BLOCKS`` blocks: the
+  sums, so the paper's rows, are the same bits as always), or
+* by changes (larger systems): the springs are summed at the step's first
+  solve, and later solves put in or take out only the springs of contacts
+  whose state changed, a normal spring where one closed or opened, the shear
+  springs where one locked or slipped (docs/performance.md, "Only the
+  contacts that changed").
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, add_penalty_pairs
+from .openclose import LOCKED, OPEN
+
+__all__ = ["ContactSprings", "INCREMENTAL_BLOCKS"]
+
+# Systems of more blocks add a solve's contact springs as changes to the last solve's sums; the sums
+# then differ from a fresh sum in their last bits, which small models (the paper's) must not.
+INCREMENTAL_BLOCKS = PARALLEL_BLOCKS
+
+
+class ContactSprings:
+    """The normal and shear springs of n contacts between blocks ``block_a`` and ``block_b``.
+
+    ``normal_a``, ``normal_b`` (n, ndof): the rows n·T of the two sides;
+    ``shear_a``, ``shear_b`` (n, k, ndof): the k shear rows; ``gap`` (n,) and
+    ``shear0`` (n, k): the start-of-step gap and shear spring displacement.
+    """
+
+    def __init__(self, block_a: np.ndarray, block_b: np.ndarray, normal_a: np.ndarray, normal_b: np.ndarray,
+                 shear_a: np.ndarray, shear_b: np.ndarray, gap: np.ndarray, shear0: np.ndarray,
+                 normal_stiffness: float, shear_stiffness: float) -> None:
+        self.block_a, self.block_b = block_a, block_b
+        self.normal_a, self.normal_b, self.shear_a, self.shear_b = normal_a, normal_b, shear_a, shear_b
+        self.gap, self.shear0 = gap, shear0
+        self.root_normal, self.root_shear = np.sqrt(normal_stiffness), np.sqrt(shear_stiffness)
+        # (diag, rhs, coupling block of every contact, the states they sum) of the sums by changes
+        self._sums: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def springs(self, index: np.ndarray, state: np.ndarray) -> PenaltyPairs:
+        """The springs of contacts ``index`` in ``state``: normal if closed, shear if locked, none if open.
+
+        Each row is scaled by the square root of its stiffness, so the pairs'
+        own stiffness is 1.
+        """
+        rn = self.root_normal * (state[index] != OPEN)
+        rs = self.root_shear * (state[index] == LOCKED)
+        rows_a = np.concatenate([rn[:, None, None] * self.normal_a[index, None], rs[:, None, None]
+                                 * self.shear_a[index]], axis=1)
+        rows_b = np.concatenate([rn[:, None, None] * self.normal_b[index, None], rs[:, None, None]
+                                 * self.shear_b[index]], axis=1)
+        gap = np.concatenate([(rn * self.gap[index])[:, None], rs[:, None] * self.shear0[index]], axis=1)
+        return PenaltyPairs(self.block_a[index], rows_a, self.block_b[index], rows_b, gap, np.ones(len(index)))
+
+    def part(self, index: np.ndarray, shear: bool, stiffness: np.ndarray) -> PenaltyPairs:
+        """The normal spring, or the shear springs, of contacts ``index`` times ``stiffness`` (±1: put in
+        or taken out)."""
+        if shear:
+            root, rows_a, rows_b, gap = self.root_shear, self.shear_a, self.shear_b, self.shear0
+        else:
+            root, rows_a, rows_b, gap = self.root_normal, self.normal_a[:, None], self.normal_b[:, None], \
+                self.gap[:, None]
+        return PenaltyPairs(self.block_a[index], root * rows_a[index], self.block_b[index], root * rows_b[index],
+                            root * gap[index], stiffness)
+
+    def add_to(self, system: BlockSystem, state: np.ndarray, c_p: float, by_changes: bool) -> None:
+        """Add the springs of ``state`` to ``system`` (matrix weight c_p, module doc): by changes to the last
+        call's sums if ``by_changes`` and the system has more than ``INCREMENTAL_BLOCKS`` blocks, else afresh."""
+        closed = np.flatnonzero(state != OPEN)
+        if not (by_changes and system.n_blocks > INCREMENTAL_BLOCKS):
+            if len(closed):
+                add_penalty_pairs(system, self.springs(closed, state), c_p)
+            return
+        if self._sums is None:
+            sums = BlockSystem.empty(system.n_blocks, system.ndof)
+            cross = np.zeros((len(state), system.ndof, system.ndof))
+            if len(closed):
+                add_penalty_pairs(sums, self.springs(closed, state), c_p)
+                cross[closed] = sums.pair_blocks[0]
+            self._sums = (sums.diag, sums.rhs, cross, state.copy())
+        diag, rhs, cross, summed_state = self._sums
+        change = BlockSystem(diag, rhs)
+        for shear, now, before in ((False, state != OPEN, summed_state != OPEN),
+                                   (True, state == LOCKED, summed_state == LOCKED)):
+            flipped = np.flatnonzero(now != before)
+            if len(flipped):
+                add_penalty_pairs(change, self.part(flipped, shear, np.where(now[flipped], 1.0, -1.0)), c_p)
+                cross[flipped] += change.pair_blocks[-1]
+        summed_state[:] = state
+        system.diag += diag
+        system.rhs += rhs
+        # only the closed contacts' coupling blocks: an open contact's zero block costs every solver iteration
+        system.add_off_diagonal(self.block_a, self.block_b, cross, which=closed)
