@@ -342,7 +342,7 @@ class BlockSystem:
         width = self.ndof * self.ndof
         stack = self.pair_blocks[0] if len(self.pair_blocks) == 1 else np.concatenate(self.pair_blocks)
         stack = np.ascontiguousarray(stack).reshape(len(stack), width)
-        entries = np.arange(self.ndof * self.ndof)
+        entries = np.arange(width)
         layouts = np.stack([entries, entries.reshape(self.ndof, self.ndof).T.ravel()])
         data = np.empty((len(first), self.ndof, self.ndof))
         sums = _segment_sums_parallel if nb > PARALLEL_BLOCKS else _segment_sums
