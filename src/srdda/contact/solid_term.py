@@ -242,8 +242,7 @@ def next_states_3d(state: np.ndarray, direction: np.ndarray, gap: np.ndarray, sh
       within the strength, else SLIDING along s/|s| (the direction of the
       load its spring carried); one that closes is LOCKED first;
     * a SLIDING contact locks when its slip turns back against its direction
-      (by more than ``friction_tolerance`` × the elastic shear limit
-      strength/k_s, which rounding of a contact at rest never reaches);
+      (any turn back: the step's slip s − s_0 has a negative component along it);
     * the glancing rule: a contact that closed in this step and then pulls
       in tension while LOCKED slides instead.
 
