@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from srdda.assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
+from srdda.assembly.system import BlockSystem, PenaltyPairs, _block_order, add_penalty_pairs
 
 
 def _random_system(nb=7, npairs=15, seed=0):
@@ -164,3 +164,20 @@ def test_coupling_blocks_picked_by_which_equal_the_picked_stack_bit_for_bit():
     assert np.array_equal(picked.to_bsr().toarray(), gathered.to_bsr().toarray())
     assert np.array_equal(picked.to_dense(), gathered.to_dense())
     assert not np.array_equal(picked.to_dense(), BlockSystem(diag.copy(), np.zeros((nb, ndof))).to_dense())
+
+
+def test_block_order_is_a_stable_sort_of_the_block_keys():
+    # to_bsr sums the blocks in this order, so it must be exactly numpy's stable sort of row·nb + col (the
+    # order the matrix's bits were made with), with the groups of equal keys and the rows' pointers
+    rng = np.random.default_rng(8)
+    for trial in range(100):
+        nb, m = int(rng.integers(1, 60)), int(rng.integers(0, 400))
+        rows = np.concatenate([np.arange(nb), rng.integers(0, nb, m)])
+        cols = np.concatenate([np.arange(nb), rng.integers(0, nb, m)])
+        key = rows * nb + cols
+        order = np.argsort(key, kind="stable")
+        first = np.flatnonzero(np.r_[True, key[order][1:] != key[order][:-1]])
+        group_rows, group_cols = np.divmod(key[order][first], nb)
+        got = _block_order(rows, cols, nb)
+        for a, b in zip(got, (order, first, group_cols, np.searchsorted(group_rows, np.arange(nb + 1)))):
+            assert np.array_equal(a, b), trial

@@ -29,14 +29,19 @@ def _assembled(stepper: Stepper, ctx, terms, base, monkeypatch, by_changes: bool
     return system.to_dense(), system.rhs.ravel().copy()
 
 
-@pytest.mark.parametrize("build", [lambda: brick_wall(6, 6), lambda: english_bond_wall(3, 3)], ids=["2d", "3d"])
-def test_springs_summed_by_changes_equal_a_fresh_sum(build, monkeypatch):
+def _first_step(build):
+    """A model's stepper at its first step: (arrays, stepper, ctx, terms, base system, contact step)."""
     model, settings = build()
     arrays = model.arrays()
     stepper = Stepper(arrays, replace(settings, n_steps=1), get_solver("dense"))
     ctx, terms = stepper.begin(initial_state(arrays, stepper.method), settings.dt)
     base = stepper.base_system(ctx, terms)
-    contacts = next(t for t in terms if isinstance(t, ContactTerm)).step
+    return arrays, stepper, ctx, terms, base, next(t for t in terms if isinstance(t, ContactTerm)).step
+
+
+@pytest.mark.parametrize("build", [lambda: brick_wall(6, 6), lambda: english_bond_wall(3, 3)], ids=["2d", "3d"])
+def test_springs_summed_by_changes_equal_a_fresh_sum(build, monkeypatch):
+    _, stepper, ctx, terms, base, contacts = _first_step(build)
     assert contacts is not None and len(contacts) > 50
     rng = np.random.default_rng(3)
     states = np.array([OPEN, SLIDING, LOCKED], dtype=np.int8)
@@ -68,3 +73,28 @@ def test_a_wall_settles_alike_with_sums_by_changes(monkeypatch):
     # measured 4.5e-20 m apart after moving 3.7e-5 m: round-off; 1e-12 m leaves room for another path of the
     # iteration and still catches a spring missing for one solve (~1e-6 m)
     assert np.abs(ends[0] - ends[1]).max() <= 1e-12
+
+
+@pytest.mark.parametrize("build", [lambda: brick_wall(6, 6), lambda: english_bond_wall(3, 3)], ids=["2d", "3d"])
+def test_gaps_and_shears_from_the_rows_equal_the_shape_products(build, monkeypatch):
+    # large systems move the gaps and shears by the springs' rows n·T, e·T times Δd in one compiled pass
+    # (ContactSprings.increments); small ones by the einsums of T·Δd. The same quantities in another order.
+    arrays, stepper, ctx, terms, base, contacts = _first_step(build)
+    stepper.assemble(ctx, terms, base)  # the shapes and rows of the step
+    rng = np.random.default_rng(5)
+    start = (contacts.state.copy(), contacts.flips.copy(), contacts.closed_this_step.copy())
+    for trial in range(5):
+        dd = rng.normal(scale=1e-4, size=(arrays.n_blocks, base.ndof))
+        found = []
+        for threshold in (0, 10**9):
+            monkeypatch.setattr("srdda.contact.penalty.INCREMENTAL_BLOCKS", threshold)
+            contacts.state, contacts.flips, contacts.closed_this_step = (a.copy() for a in start)
+            contacts.iterations, contacts._secant = 0, None
+            contacts.converged(dd, ctx)
+            found.append((contacts.gap.copy(), contacts.shear.copy(), contacts.state.copy()))
+        (gap, shear, state), (gap_ref, shear_ref, state_ref) = found
+        # 12-24 products of 1e-4 m displacements by shape entries of order 1: a few ulp of the largest term
+        scale = np.abs(gap_ref).max() + np.abs(shear_ref).max()
+        assert np.abs(gap - gap_ref).max() <= 1e-13 * scale, trial
+        assert np.abs(shear - shear_ref).max() <= 1e-13 * scale, trial
+        assert np.array_equal(state, state_ref), trial  # and so the open-close rules decide alike

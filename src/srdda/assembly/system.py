@@ -334,10 +334,8 @@ class BlockSystem:
             return sp.bsr_matrix((self.diag, np.arange(nb), np.arange(nb + 1)), shape=(n, n))
         bi, bj, source, flip = self._couplings()
         free = self._free_couplings(bi, bj)
-        key = np.concatenate([np.arange(nb) * (nb + 1), bi[free] * nb + bj[free]])
-        order = np.argsort(key, kind="stable")
-        key = key[order]
-        first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+        order, first, cols, indptr = _block_order(np.concatenate([np.arange(nb), bi[free]]),
+                                                  np.concatenate([np.arange(nb), bj[free]]), nb)
         # the sorted blocks as rows of [diag; stacks], read in place or transposed (one stack: not copied)
         width = self.ndof * self.ndof
         stack = self.pair_blocks[0] if len(self.pair_blocks) == 1 else np.concatenate(self.pair_blocks)
@@ -350,8 +348,6 @@ class BlockSystem:
              np.concatenate([np.arange(nb), source[free]])[order],
              np.concatenate([np.zeros(nb, dtype=np.int8), flip[free]])[order], layouts, first,
              data.reshape(len(first), -1))
-        rows, cols = np.divmod(key[first], nb)
-        indptr = np.searchsorted(rows, np.arange(nb + 1))
         return sp.bsr_matrix((data, cols, indptr), shape=(n, n))
 
     def to_csr(self) -> sp.csr_matrix:
@@ -366,6 +362,48 @@ class BlockSystem:
             return out.reshape(n, n)
         rows, cols, vals = self.triplets()
         return np.bincount(rows * n + cols, weights=vals, minlength=n * n).reshape(n, n)
+
+
+@njit(cache=True)
+def _block_order(rows: np.ndarray, cols: np.ndarray, nb: int) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                        np.ndarray]:
+    """The blocks (row, col) sorted by row then column, equal ones in their given order (a stable sort of
+    row·nb + col: the order of the sums, so the bits of the matrix); and the sorted positions where each
+    distinct (row, col) starts, its column and the rows' pointers (BSR ``indices``, ``indptr``).
+
+    A counting sort by row and an insertion sort of each row's few blocks by column: O(n), where a sort of
+    the keys took a third of the assembly of the 10,000-brick wall.
+    """
+    n = len(rows)
+    start = np.zeros(nb + 1, dtype=np.int64)
+    for e in range(n):
+        start[rows[e] + 1] += 1
+    for r in range(nb):
+        start[r + 1] += start[r]
+    fill = start[:-1].copy()
+    order = np.empty(n, dtype=np.int64)
+    for e in range(n):
+        order[fill[rows[e]]] = e
+        fill[rows[e]] += 1
+    first = np.empty(n, dtype=np.int64)
+    block_cols = np.empty(n, dtype=np.int64)
+    indptr = np.zeros(nb + 1, dtype=np.int64)
+    groups = 0
+    for r in range(nb):
+        for k in range(start[r] + 1, start[r + 1]):  # stable: an entry moves only past larger columns
+            e = order[k]
+            m = k - 1
+            while m >= start[r] and cols[order[m]] > cols[e]:
+                order[m + 1] = order[m]
+                m -= 1
+            order[m + 1] = e
+        for k in range(start[r], start[r + 1]):
+            if k == start[r] or cols[order[k]] != cols[order[k - 1]]:
+                first[groups] = k
+                block_cols[groups] = cols[order[k]]
+                groups += 1
+        indptr[r + 1] = groups
+    return order, first[:groups], block_cols[:groups], indptr
 
 
 @dataclass(frozen=True)

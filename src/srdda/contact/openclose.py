@@ -46,6 +46,7 @@ changes").
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 __all__ = ["OPEN", "SLIDING", "LOCKED", "next_states", "negligible_force", "negligible_changes", "never_held",
            "deepest_penetration"]
@@ -69,28 +70,51 @@ def next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.
     this step; ``friction_normal`` is the normal force the last solve used for
     the friction of sliding contacts.
     """
-    normal = -kn * gap
-    # a closed contact opens once its gap exceeds T/k_n + tolerance (Shi's f0·w0), an open one
-    # closes at any penetration (so the band never adds spring energy)
-    closed = normal >= -tension_force - np.where(state != OPEN, kn * tolerance, 0.0)
-    strength = np.maximum(normal, 0.0) * tan_phi + cohesion_force
-    slip = np.sign(shear).astype(np.int8)
-    holds = ks * np.abs(shear) <= strength
-    # a sliding contact locks only when its slip reverses by more than the tolerance (Shi), and keeps
-    # its slip direction while it slides
-    reversed_slip = (state == SLIDING) & (sign * shear < -tolerance) & (strength > 0)
-    holds = holds & (state != SLIDING)
-    just_closed = state == OPEN
-    glancing = (state == LOCKED) & ~closed & closed_this_step
-    new_state = np.where(closed, np.where(holds | reversed_slip | just_closed, LOCKED, SLIDING), OPEN)
-    new_state = np.where(glancing, SLIDING, new_state).astype(np.int8)
-    new_sign = np.where(new_state == SLIDING, np.where(state == SLIDING, sign, slip), 0).astype(np.int8)
-    friction = tan_phi > 0
-    changed = (new_state != state) | ((new_state == SLIDING) & (new_sign != sign) & friction)
-    unsettled = (new_state == SLIDING) & (state == SLIDING) & friction & (
-        np.abs(np.maximum(normal, 0.0) - friction_normal) > friction_tolerance * np.maximum(normal, 0.0)) & (
-        np.abs(np.maximum(normal, 0.0) - friction_normal) * tan_phi > settled_force)
+    n = len(state)
+    new_state, new_sign = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int8)
+    changed, unsettled = np.empty(n, dtype=bool), np.empty(n, dtype=bool)
+    _next_states(state, sign, gap, shear, float(kn), float(ks), tan_phi, cohesion_force, tension_force,
+                 closed_this_step, friction_normal, float(friction_tolerance), float(tolerance),
+                 np.broadcast_to(np.asarray(settled_force, dtype=np.float64), (n,)), new_state, new_sign, changed,
+                 unsettled)
     return new_state, new_sign, changed, unsettled
+
+
+@njit(cache=True)
+def _next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.ndarray, kn: float, ks: float,
+                 tan_phi: np.ndarray, cohesion_force: np.ndarray, tension_force: np.ndarray,
+                 closed_this_step: np.ndarray, friction_normal: np.ndarray, friction_tolerance: float,
+                 tolerance: float, settled_force: np.ndarray, new_state: np.ndarray, new_sign: np.ndarray,
+                 changed: np.ndarray, unsettled: np.ndarray) -> None:
+    """:func:`next_states` contact by contact, into the four outputs (the gap and shear are finite: a solve
+    that is not has already failed)."""
+    for c in range(len(state)):
+        normal = -kn * gap[c]
+        # a closed contact opens once its gap exceeds T/k_n + tolerance (Shi's f0·w0), an open one
+        # closes at any penetration (so the band never adds spring energy)
+        closed = normal >= -tension_force[c] - (kn * tolerance if state[c] != OPEN else 0.0)
+        compression = normal if normal > 0.0 else 0.0
+        strength = compression * tan_phi[c] + cohesion_force[c]
+        slip = 1 if shear[c] > 0.0 else (-1 if shear[c] < 0.0 else 0)
+        # a sliding contact locks only when its slip reverses by more than the tolerance (Shi), and keeps
+        # its slip direction while it slides
+        reversed_slip = state[c] == SLIDING and sign[c] * shear[c] < -tolerance and strength > 0.0
+        holds = ks * abs(shear[c]) <= strength and state[c] != SLIDING
+        if not closed:
+            after = OPEN
+        elif holds or reversed_slip or state[c] == OPEN:  # a contact that closes locks first
+            after = LOCKED
+        else:
+            after = SLIDING
+        if state[c] == LOCKED and not closed and closed_this_step[c]:  # glancing
+            after = SLIDING
+        after_sign = (sign[c] if state[c] == SLIDING else slip) if after == SLIDING else 0
+        friction = tan_phi[c] > 0.0
+        new_state[c], new_sign[c] = after, after_sign
+        changed[c] = after != state[c] or (after == SLIDING and after_sign != sign[c] and friction)
+        off = abs(compression - friction_normal[c])
+        unsettled[c] = after == SLIDING and state[c] == SLIDING and friction and (
+            off > friction_tolerance * compression) and off * tan_phi[c] > settled_force[c]
 
 
 def negligible_force(block_mass: np.ndarray, gravity: np.ndarray, block_a: np.ndarray, block_b: np.ndarray,

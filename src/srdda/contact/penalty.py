@@ -18,15 +18,22 @@ contacts' current states to a solve's system, either
 from __future__ import annotations
 
 import numpy as np
+from numba import njit, prange
 
 from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, add_penalty_pairs
 from .openclose import LOCKED, OPEN
 
-__all__ = ["ContactSprings", "INCREMENTAL_BLOCKS"]
+__all__ = ["ContactSprings", "INCREMENTAL_BLOCKS", "is_large"]
 
 # Systems of more blocks add a solve's contact springs as changes to the last solve's sums; the sums
 # then differ from a fresh sum in their last bits, which small models (the paper's) must not.
 INCREMENTAL_BLOCKS = PARALLEL_BLOCKS
+
+
+def is_large(n_blocks: int) -> bool:
+    """Whether a system of ``n_blocks`` takes the large-system paths: sums by changes and the rows' compiled
+    passes (:meth:`ContactSprings.increments`), whose sums differ from the small systems' in the last bits."""
+    return n_blocks > INCREMENTAL_BLOCKS
 
 
 class ContactSprings:
@@ -46,6 +53,16 @@ class ContactSprings:
         self.root_normal, self.root_shear = np.sqrt(normal_stiffness), np.sqrt(shear_stiffness)
         # (diag, rhs, coupling block of every contact, the states they sum) of the sums by changes
         self._sums: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def increments(self, dd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """How the gaps (n,) and shear spring displacements (n, k) move with the solve's ``dd``:
+        the rows times Δd_a minus the rows times Δd_b, one compiled pass on all cores (for systems of more
+        than ``INCREMENTAL_BLOCKS`` blocks: its sums differ from the contact terms' einsums in the last bits)."""
+        n, k, _ = self.shear_a.shape
+        dn, ds = np.empty(n), np.empty((n, k))
+        _row_increments(self.block_a, self.block_b, self.normal_a, self.normal_b, self.shear_a, self.shear_b,
+                        np.ascontiguousarray(dd), dn, ds)
+        return dn, ds
 
     def springs(self, index: np.ndarray, state: np.ndarray) -> PenaltyPairs:
         """The springs of contacts ``index`` in ``state``: normal if closed, shear if locked, none if open.
@@ -77,7 +94,7 @@ class ContactSprings:
         """Add the springs of ``state`` to ``system`` (matrix weight c_p, module doc): by changes to the last
         call's sums if ``by_changes`` and the system has more than ``INCREMENTAL_BLOCKS`` blocks, else afresh."""
         closed = np.flatnonzero(state != OPEN)
-        if not (by_changes and system.n_blocks > INCREMENTAL_BLOCKS):
+        if not (by_changes and is_large(system.n_blocks)):
             if len(closed):
                 add_penalty_pairs(system, self.springs(closed, state), c_p)
             return
@@ -101,3 +118,21 @@ class ContactSprings:
         system.rhs += rhs
         # only the closed contacts' coupling blocks: an open contact's zero block costs every solver iteration
         system.add_off_diagonal(self.block_a, self.block_b, cross, which=closed)
+
+
+@njit(parallel=True, cache=True)
+def _row_increments(block_a: np.ndarray, block_b: np.ndarray, normal_a: np.ndarray, normal_b: np.ndarray,
+                    shear_a: np.ndarray, shear_b: np.ndarray, dd: np.ndarray, dn: np.ndarray, ds: np.ndarray) -> None:
+    """dn = normal_a·dd[a] - normal_b·dd[b] and ds likewise with the shear rows, contact by contact."""
+    n, k, ndof = shear_a.shape
+    for c in prange(n):
+        a, b = block_a[c], block_b[c]
+        acc = 0.0
+        for i in range(ndof):
+            acc += normal_a[c, i] * dd[a, i] - normal_b[c, i] * dd[b, i]
+        dn[c] = acc
+        for r in range(k):
+            acc = 0.0
+            for i in range(ndof):
+                acc += shear_a[c, r, i] * dd[a, i] - shear_b[c, r, i] * dd[b, i]
+            ds[c, r] = acc

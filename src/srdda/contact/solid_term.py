@@ -43,7 +43,7 @@ from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays, 
 from ..term import LEDGER, StepContext
 from .openclose import LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held
 from .candidates import KeptCandidates
-from .penalty import ContactSprings
+from .penalty import ContactSprings, is_large
 from .polyhedra_broadphase import block_boxes_3d, candidate_pairs_3d
 from .polyhedra_narrowphase import EDGE_EDGE, FOUND_FIELDS, VERTEX_FACE, detect_polyhedra_contacts
 from .term import ContactParameters, ContactTerm, pair_keys
@@ -394,10 +394,16 @@ class SolidContactStep:
         g = self.geometry
         # the gap and shear moved by n·(T_a·Δd_a - T_b·Δd_b) and e·(...): the rows n·T, e·T of add_to, so
         # that a solve's check costs 12 products a row, not the 3 × 12 of T·Δd
-        normal_a, shear_a, normal_b, shear_b = self._rows
-        da, db = dd[g.block_a], dd[g.block_b]
-        self.gap = g.gap + (np.einsum("ni,ni->n", normal_a, da) - np.einsum("ni,ni->n", normal_b, db))
-        self.shear = self.shear0 + (np.einsum("nki,ni->nk", shear_a, da) - np.einsum("nki,ni->nk", shear_b, db))
+        if is_large(len(dd)):  # one compiled pass over the same rows (other last bits)
+            assert self._springs is not None
+            normal_increment, shear_increment = self._springs.increments(dd)
+            self.gap = g.gap + normal_increment
+            self.shear = self.shear0 + shear_increment
+        else:
+            normal_a, shear_a, normal_b, shear_b = self._rows
+            da, db = dd[g.block_a], dd[g.block_b]
+            self.gap = g.gap + (np.einsum("ni,ni->n", normal_a, da) - np.einsum("ni,ni->n", normal_b, db))
+            self.shear = self.shear0 + (np.einsum("nki,ni->nk", shear_a, da) - np.einsum("nki,ni->nk", shear_b, db))
         p = self.params
         self.closed_this_step |= (self.state == OPEN) & (self.gap < 0)
         state, direction, trial_direction, changed, unsettled = next_states_3d(

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba import njit
 
 from ..assembly.system import BlockSystem, scatter_add
 from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays
@@ -25,7 +26,7 @@ from ..geometry.polygon import previous_vertex_index
 from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts
 from .openclose import (LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held,
                         next_states)
-from .penalty import ContactSprings
+from .penalty import ContactSprings, is_large
 from .springs import ContactGeometry, bond_length, contact_geometry
 from .transfer import contact_keys, match_previous
 
@@ -110,6 +111,7 @@ class ContactStep:
         self._shapes: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._shapes_theta: np.ndarray | None = None  # the rotation increment the shapes were made with
         self._springs: ContactSprings | None = None  # the springs at the shapes (add_to)
+        self._foot_tangent: np.ndarray | None = None  # t·T_q at the shapes (friction of large systems)
         self._solved_state = state
         self._force_limit: np.ndarray | float = 0.0  # N, per contact: a state change below needs no solve
         # block pairs of the last solve's state changes (for the message of a cut step)
@@ -125,6 +127,7 @@ class ContactStep:
             self._shapes = (ctx.shape_at(a, g.point), ctx.shape_at(b, g.foot),
                             ctx.shape_at(b, g.point_on_edge(self.reference)))
             self._shapes_theta = ctx.theta
+            self._foot_tangent = None
             tv, tq, tr = self._shapes
             # the springs' unit rows n·T and t·T of every contact, whatever its state in the solves
             self._springs = ContactSprings(a, b, np.einsum("nk,nki->ni", g.normal, tv),
@@ -144,18 +147,30 @@ class ContactStep:
         if np.any(sliding):
             # Coulomb friction opposing the slip of v along the edge, N of the last solve (Shi 1988)
             magnitude = self.friction[sliding]
-            force = magnitude[:, None] * g.tangent[sliding]
-            scatter_add(system.rhs, a[sliding], np.einsum("nki,nk->ni", tv[sliding], force))
-            scatter_add(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tq[sliding], force))
+            if is_large(system.n_blocks):  # f·(t·T): the rows t·T_v (the shear spring's) and t·T_q
+                if self._foot_tangent is None:
+                    self._foot_tangent = np.einsum("nk,nki->ni", g.tangent, tq)
+                scatter_add(system.rhs, a[sliding], magnitude[:, None] * self._springs.shear_a[sliding, 0])
+                scatter_add(system.rhs, b[sliding], -magnitude[:, None] * self._foot_tangent[sliding])
+            else:  # T·(f t): the order of sums the paper's rows were made with
+                force = magnitude[:, None] * g.tangent[sliding]
+                scatter_add(system.rhs, a[sliding], np.einsum("nki,nk->ni", tv[sliding], force))
+                scatter_add(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tq[sliding], force))
 
     def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         assert self._shapes is not None
         g = self.geometry
         tv, tq, tr = self._shapes
-        ua = np.einsum("nki,ni->nk", tv, dd[g.vertex_block])
-        self.gap = g.gap + np.einsum("nk,nk->n", g.normal, ua - np.einsum("nki,ni->nk", tq, dd[g.edge_block]))
-        self.shear = self.shear0 + np.einsum("nk,nk->n", g.tangent,
-                                             ua - np.einsum("nki,ni->nk", tr, dd[g.edge_block]))
+        if is_large(len(dd)):  # the springs' rows n·T, t·T times Δd: one compiled pass
+            assert self._springs is not None
+            normal_increment, shear_increment = self._springs.increments(dd)
+            self.gap = g.gap + normal_increment
+            self.shear = self.shear0 + shear_increment[:, 0]
+        else:  # n·(T_v·Δd_v - T_q·Δd_q): the order of sums the paper's rows were made with
+            ua = np.einsum("nki,ni->nk", tv, dd[g.vertex_block])
+            self.gap = g.gap + np.einsum("nk,nk->n", g.normal, ua - np.einsum("nki,ni->nk", tq, dd[g.edge_block]))
+            self.shear = self.shear0 + np.einsum("nk,nk->n", g.tangent,
+                                                 ua - np.einsum("nki,ni->nk", tr, dd[g.edge_block]))
         p = self.params
         self.closed_this_step |= (self.state == OPEN) & (self.gap < 0)
         normal = np.maximum(-p.normal_stiffness * self.gap, 0.0)
@@ -213,19 +228,10 @@ class ContactStep:
         """
         used, solved = self.friction_normal, self.normal_force
         residual = solved - used
-        nxt = solved.copy()
         sliding = (self.state == SLIDING) & (new_state == SLIDING)
+        nxt = solved.copy()
         if self._secant is not None:
-            prev_used, prev_residual = self._secant
-            slope = residual - prev_residual
-            ok = sliding & (np.abs(slope) > 1e-12 * np.maximum(np.abs(residual), 1e-300)) & (used != prev_used)
-            step = np.where(ok, residual * (used - prev_used) / np.where(ok, slope, 1.0), 0.0)
-            # safeguarded: taken only between N_used and N_solved, where the fixed point of a map with
-            # slope in (-1, 0] lies; else plain substitution (a far extrapolation would load friction
-            # past any N of the step)
-            secant = used - step
-            inside = (secant >= np.minimum(used, solved)) & (secant <= np.maximum(used, solved))
-            nxt = np.where(ok & inside & (solved > 0), secant, nxt)
+            _secant_normal(used, solved, residual, *self._secant, sliding, nxt)
         self._secant = (used.copy(), residual)
         return nxt
 
@@ -462,3 +468,20 @@ class ContactTerm(Term):
         out[LEDGER.index("dissipated_friction")] = -friction
         out[LEDGER.index("dissipated_contact")] = -springs - (stored - self.energy(ctx.arrays, ctx.state))
         return out
+
+
+@njit(cache=True)
+def _secant_normal(used: np.ndarray, solved: np.ndarray, residual: np.ndarray, prev_used: np.ndarray,
+                   prev_residual: np.ndarray, sliding: np.ndarray, nxt: np.ndarray) -> None:
+    """The secant step of :meth:`ContactStep._next_friction_normal` where it applies, into ``nxt``.
+
+    Safeguarded: taken only between N_used and N_solved, where the fixed point
+    of a map with slope in (-1, 0] lies; elsewhere ``nxt`` keeps plain
+    substitution (a far extrapolation would load friction past any N of the step).
+    """
+    for c in range(len(used)):
+        slope = residual[c] - prev_residual[c]
+        if sliding[c] and abs(slope) > 1e-12 * max(abs(residual[c]), 1e-300) and used[c] != prev_used[c]:
+            secant = used[c] - residual[c] * (used[c] - prev_used[c]) / slope
+            if min(used[c], solved[c]) <= secant <= max(used[c], solved[c]) and solved[c] > 0.0:
+                nxt[c] = secant
