@@ -131,6 +131,20 @@ def test_two_worker_processes_give_the_same_tables(reference: Path, tmp_path: Pa
     assert_same_tables(reference, tmp_path / "out")
 
 
+def _numba_threads() -> int:
+    import numba
+    return numba.get_num_threads()
+
+
+def test_worker_processes_share_the_cores_among_their_numba_threads() -> None:
+    # numba starts one thread per core in every process: two workers on two cores would each run a large
+    # model's compiled loops on two threads (four threads on two cores)
+    from srdda.ensemble.runner import _client
+    with _client(2, None, processes=True) as client:
+        threads = {client.submit(_numba_threads, pure=False).result() for _ in range(4)}
+    assert threads == {max(1, (os.cpu_count() or 1) // 2)}
+
+
 def test_resume_after_a_stop_gives_the_uninterrupted_tables(reference: Path, tmp_path: Path) -> None:
     spec = write_spec(tmp_path)
     first = run_ensemble(spec, tmp_path / "out", runs=3, workers=1, processes=False, progress=False)

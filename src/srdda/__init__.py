@@ -11,6 +11,7 @@ post-adjusted rotations (``dda1``) and SRDDA (``srdda``). SI units throughout.
 >>> res.completed
 True
 """
+from . import threads as _threads  # first: how numba's threads wait, before they start (srdda.threads)
 from .constraints import MotionHistory, hinge_forces
 from .history import TimeHistory
 from .contact import ContactSet

@@ -131,9 +131,20 @@ def _client(workers: int | None, scheduler: str | None, processes: bool) -> Iter
             yield client
         return
     n = workers or os.cpu_count() or 1
+    # the cores shared among the worker processes: a run of more than 500 blocks runs its compiled loops on
+    # numba's threads, one per core by default in every worker (docs/ensembles.md)
+    env = {"env": {NUMBA_THREADS: str(numba_threads_per_worker(n))}} if processes else {}
     with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=":0",
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+                      silence_logs=logging.ERROR, **env) as cluster, Client(cluster) as client:
         yield client
+
+
+NUMBA_THREADS = "NUMBA_NUM_THREADS"
+
+
+def numba_threads_per_worker(workers: int) -> int:
+    """numba threads for each of ``workers`` processes on this machine: its cores shared out, at least one."""
+    return max(1, (os.cpu_count() or 1) // workers)
 
 
 @dataclass
