@@ -17,6 +17,7 @@ import srdda
 
 from srdda.bench.models import brick_wall, english_bond_wall
 from srdda.contact.openclose import LOCKED, OPEN, SLIDING
+from srdda.contact.penalty import directional_rows
 from srdda.contact.term import ContactTerm
 from srdda.solvers import get_solver
 from srdda.state import initial_state
@@ -98,3 +99,19 @@ def test_gaps_and_shears_from_the_rows_equal_the_shape_products(build, monkeypat
         assert np.abs(gap - gap_ref).max() <= 1e-13 * scale, trial
         assert np.abs(shear - shear_ref).max() <= 1e-13 * scale, trial
         assert np.array_equal(state, state_ref), trial  # and so the open-close rules decide alike
+
+
+@pytest.mark.parametrize("spec, directions, shapes", [
+    ("nk,nki->ni", (2,), (2, 6)),  # 2D: n·T, t·T
+    ("nk,nki->ni", (3,), (3, 12)),  # 3D: n·T
+    ("nmk,nki->nmi", (2, 3), (3, 12)),  # 3D: the frame's two shear directions e·T
+], ids=["2d", "3d-normal", "3d-frame"])
+def test_directional_rows_are_the_einsum_bit_for_bit(spec, directions, shapes):
+    # the contact springs' rows: the compiled pass replaced these einsums at every size, so the paper's rows
+    # keep their bits; zeros and signed zeros included (shape entries vanish, directions are axis-aligned)
+    rng = np.random.default_rng(21)
+    n = 50_000
+    d, t = rng.normal(size=(n, *directions)), rng.normal(size=(n, *shapes))
+    d[rng.random(d.shape) < 0.1] = -0.0
+    t[rng.random(t.shape) < 0.2] = 0.0
+    assert np.array_equal(directional_rows(d, t).view(np.int64), np.einsum(spec, d, t).view(np.int64))

@@ -23,7 +23,7 @@ from numba import njit, prange
 from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, add_penalty_pairs
 from .openclose import LOCKED, OPEN
 
-__all__ = ["ContactSprings", "INCREMENTAL_BLOCKS", "is_large"]
+__all__ = ["ContactSprings", "INCREMENTAL_BLOCKS", "is_large", "directional_rows"]
 
 # Systems of more blocks add a solve's contact springs as changes to the last solve's sums; the sums
 # then differ from a fresh sum in their last bits, which small models (the paper's) must not.
@@ -34,6 +34,21 @@ def is_large(n_blocks: int) -> bool:
     """Whether a system of ``n_blocks`` takes the large-system paths: sums by changes and the rows' compiled
     passes (:meth:`ContactSprings.increments`), whose sums differ from the small systems' in the last bits."""
     return n_blocks > INCREMENTAL_BLOCKS
+
+
+def directional_rows(directions: np.ndarray, shapes: np.ndarray) -> np.ndarray:
+    """d·T of every contact: the rows (n, ndof) of directions d (n, k) through shape functions T (n, k, ndof),
+    or (n, m, ndof) for m directions each (n, m, k).
+
+    One compiled pass; each entry sums from zero over k in turn, as numpy's
+    einsum does for these products (the same bits, checked in
+    tests/test_contact_assembly.py), without its set-up per call.
+    """
+    several = directions.ndim == shapes.ndim  # (n, m, k) against (n, k, ndof)
+    d = np.ascontiguousarray(directions if several else directions[:, None, :], dtype=np.float64)
+    out = np.empty((*d.shape[:-1], shapes.shape[-1]))
+    _directional_rows(d, np.ascontiguousarray(shapes, dtype=np.float64), out)
+    return out if several else out[:, 0]
 
 
 class ContactSprings:
@@ -72,12 +87,13 @@ class ContactSprings:
         """
         rn = self.root_normal * (state[index] != OPEN)
         rs = self.root_shear * (state[index] == LOCKED)
-        rows_a = np.concatenate([rn[:, None, None] * self.normal_a[index, None], rs[:, None, None]
-                                 * self.shear_a[index]], axis=1)
-        rows_b = np.concatenate([rn[:, None, None] * self.normal_b[index, None], rs[:, None, None]
-                                 * self.shear_b[index]], axis=1)
-        gap = np.concatenate([(rn * self.gap[index])[:, None], rs[:, None] * self.shear0[index]], axis=1)
-        return PenaltyPairs(self.block_a[index], rows_a, self.block_b[index], rows_b, gap, np.ones(len(index)))
+        (_, k, ndof), n = self.shear_a.shape, len(index)
+        rows_a, rows_b, gap = np.empty((n, 1 + k, ndof)), np.empty((n, 1 + k, ndof)), np.empty((n, 1 + k, 1))
+        _stacked_rows(index, self.normal_a, self.shear_a, rn, rs, rows_a)
+        _stacked_rows(index, self.normal_b, self.shear_b, rn, rs, rows_b)
+        _stacked_rows(index, self.gap[:, None], self.shear0[:, :, None], rn, rs, gap)
+        return PenaltyPairs(self.block_a[index], rows_a, self.block_b[index], rows_b, gap[:, :, 0],
+                            np.ones(len(index)))
 
     def part(self, index: np.ndarray, shear: bool, stiffness: np.ndarray) -> PenaltyPairs:
         """The normal spring, or the shear springs, of contacts ``index`` times ``stiffness`` (±1: put in
@@ -98,12 +114,10 @@ class ContactSprings:
             if len(closed):
                 add_penalty_pairs(system, self.springs(closed, state), c_p)
             return
-        if self._sums is None:
+        if self._sums is None:  # every contact, the open ones with rows of zero: a coupling block for each
             sums = BlockSystem.empty(system.n_blocks, system.ndof)
-            cross = np.zeros((len(state), system.ndof, system.ndof))
-            if len(closed):
-                add_penalty_pairs(sums, self.springs(closed, state), c_p)
-                cross[closed] = sums.pair_blocks[0]
+            add_penalty_pairs(sums, self.springs(np.arange(len(state)), state), c_p)
+            cross = sums.pair_blocks[0] if sums.pair_blocks else np.zeros((len(state), system.ndof, system.ndof))
             self._sums = (sums.diag, sums.rhs, cross, state.copy())
         diag, rhs, cross, summed_state = self._sums
         change = BlockSystem(diag, rhs)
@@ -118,6 +132,34 @@ class ContactSprings:
         system.rhs += rhs
         # only the closed contacts' coupling blocks: an open contact's zero block costs every solver iteration
         system.add_off_diagonal(self.block_a, self.block_b, cross, which=closed)
+
+
+@njit(parallel=True, cache=True)
+def _directional_rows(directions: np.ndarray, shapes: np.ndarray, out: np.ndarray) -> None:
+    """out[c, m, i] = Σ_k directions[c, m, k]·shapes[c, k, i], summed from zero in k order."""
+    n, count, k = directions.shape
+    width = out.shape[-1]
+    for c in prange(n):
+        for m in range(count):
+            for i in range(width):
+                acc = 0.0
+                for r in range(k):
+                    acc += directions[c, m, r] * shapes[c, r, i]
+                out[c, m, i] = acc
+
+
+@njit(cache=True)
+def _stacked_rows(index: np.ndarray, first: np.ndarray, more: np.ndarray, first_scale: np.ndarray,
+                  more_scale: np.ndarray, out: np.ndarray) -> None:
+    """out[m] = [first_scale[m]·first[c]; more_scale[m]·more[c]] for c = index[m]: a spring's rows, stacked."""
+    _, k, width = more.shape
+    for m in range(len(index)):
+        c = index[m]
+        for i in range(width):
+            out[m, 0, i] = first_scale[m] * first[c, i]
+        for r in range(k):
+            for i in range(width):
+                out[m, 1 + r, i] = more_scale[m] * more[c, r, i]
 
 
 @njit(parallel=True, cache=True)

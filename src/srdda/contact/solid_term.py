@@ -43,7 +43,7 @@ from ..model import JOINT_COHESION, JOINT_FRICTION, JOINT_TENSION, ModelArrays, 
 from ..term import LEDGER, StepContext
 from .openclose import LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held
 from .candidates import KeptCandidates
-from .penalty import ContactSprings, is_large
+from .penalty import ContactSprings, directional_rows, is_large
 from .polyhedra_broadphase import block_boxes_3d, candidate_pairs_3d
 from .polyhedra_narrowphase import EDGE_EDGE, FOUND_FIELDS, VERTEX_FACE, detect_polyhedra_contacts
 from .term import ContactParameters, ContactTerm, pair_keys
@@ -371,8 +371,8 @@ class SolidContactStep:
             self._shapes_theta = ctx.theta
             ta, tb, tra, trb = self._shapes
             # the springs' unit rows n·T and e·T of every contact, whatever its state in the solves
-            self._rows = (np.einsum("ni,nij->nj", g.normal, ta), np.einsum("nki,nij->nkj", g.frame, tra),
-                          np.einsum("ni,nij->nj", g.normal, tb), np.einsum("nki,nij->nkj", g.frame, trb))
+            self._rows = (directional_rows(g.normal, ta), directional_rows(g.frame, tra),
+                          directional_rows(g.normal, tb), directional_rows(g.frame, trb))
             normal_a, shear_a, normal_b, shear_b = self._rows
             self._springs = ContactSprings(a, b, normal_a, normal_b, shear_a, shear_b, g.gap, self.shear0,
                                            self.params.normal_stiffness, self.params.shear_stiffness)

@@ -26,7 +26,7 @@ from ..geometry.polygon import previous_vertex_index
 from .narrowphase import FOUND_EDGE, FOUND_FIELDS, FOUND_KIND, FOUND_VERTEX, detect_contacts
 from .openclose import (LOCKED, OPEN, SLIDING, deepest_penetration, negligible_changes, negligible_force, never_held,
                         next_states)
-from .penalty import ContactSprings, is_large
+from .penalty import ContactSprings, directional_rows, is_large
 from .springs import ContactGeometry, bond_length, contact_geometry
 from .transfer import contact_keys, match_previous
 
@@ -130,10 +130,9 @@ class ContactStep:
             self._foot_tangent = None
             tv, tq, tr = self._shapes
             # the springs' unit rows n·T and t·T of every contact, whatever its state in the solves
-            self._springs = ContactSprings(a, b, np.einsum("nk,nki->ni", g.normal, tv),
-                                           np.einsum("nk,nki->ni", g.normal, tq),
-                                           np.einsum("nk,nki->ni", g.tangent, tv)[:, None],
-                                           np.einsum("nk,nki->ni", g.tangent, tr)[:, None], g.gap,
+            self._springs = ContactSprings(a, b, directional_rows(g.normal, tv), directional_rows(g.normal, tq),
+                                           directional_rows(g.tangent[:, None], tv),
+                                           directional_rows(g.tangent[:, None], tr), g.gap,
                                            self.shear0[:, None], self.params.normal_stiffness,
                                            self.params.shear_stiffness)
         tv, tq, tr = self._shapes
@@ -149,7 +148,7 @@ class ContactStep:
             magnitude = self.friction[sliding]
             if is_large(system.n_blocks):  # f·(t·T): the rows t·T_v (the shear spring's) and t·T_q
                 if self._foot_tangent is None:
-                    self._foot_tangent = np.einsum("nk,nki->ni", g.tangent, tq)
+                    self._foot_tangent = directional_rows(g.tangent, tq)
                 scatter_add(system.rhs, a[sliding], magnitude[:, None] * self._springs.shear_a[sliding, 0])
                 scatter_add(system.rhs, b[sliding], -magnitude[:, None] * self._foot_tangent[sliding])
             else:  # T·(f t): the order of sums the paper's rows were made with
