@@ -6,14 +6,14 @@ numba runs the loops of systems of more than 500 blocks on its OpenMP threads
 are, a spinning thread holds the core that the thread it waits for needs, and
 every barrier then waits a time slice of the scheduler. Two runs at once, or an
 ensemble's worker per core, are enough: two 1,041-block walls run together
-took 317 s each instead of 2 s alone.
+took 317 s each, against 1.4 s for one alone.
 
 ``GOMP_SPINCOUNT`` = 1,000 puts a waiting thread to sleep after a few
-microseconds. The two runs then take 3.4 s each, and a run alone 2-3 % longer
-(docs/performance.md, "Two runs at once"). A value the user has set wins.
-libgomp reads it when numba first starts its threads, which is after this
-import, unless that process had run a parallel numba function before
-importing srdda.
+microseconds. The two runs then take 3.4 s each, and a run alone 1.45-1.48 s,
+within its run-to-run spread (docs/performance.md, "Two runs at once"). A
+value the user has set wins. libgomp reads it when numba first starts its
+threads, which is after this import, unless that process had run a parallel
+numba function before importing srdda.
 """
 from __future__ import annotations
 

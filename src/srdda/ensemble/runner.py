@@ -121,6 +121,14 @@ def _claim(out: Path, spec: EnsembleSpec, base: dict[str, Any]) -> None:
     _write_json_atomic(path, {"fingerprint": fingerprint, "spec": spec.model_dump(mode="json", exclude={"runs"})})
 
 
+NUMBA_THREADS = "NUMBA_NUM_THREADS"
+
+
+def numba_threads_per_worker(workers: int) -> int:
+    """numba threads for each of ``workers`` processes on this machine: its cores shared out, at least one."""
+    return max(1, (os.cpu_count() or 1) // workers)
+
+
 @contextmanager
 def _client(workers: int | None, scheduler: str | None, processes: bool) -> Iterator[Any]:
     """A Dask client: of the running scheduler at ``scheduler``, or of a new LocalCluster closed on exit."""
@@ -137,14 +145,6 @@ def _client(workers: int | None, scheduler: str | None, processes: bool) -> Iter
     with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=":0",
                       silence_logs=logging.ERROR, **env) as cluster, Client(cluster) as client:
         yield client
-
-
-NUMBA_THREADS = "NUMBA_NUM_THREADS"
-
-
-def numba_threads_per_worker(workers: int) -> int:
-    """numba threads for each of ``workers`` processes on this machine: its cores shared out, at least one."""
-    return max(1, (os.cpu_count() or 1) // workers)
 
 
 @dataclass
