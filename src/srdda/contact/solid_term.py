@@ -356,7 +356,6 @@ class SolidContactStep:
         self.unsettled_pairs = np.column_stack([geometry.block_a[:0], geometry.block_b[:0]])
         self._shapes: tuple[np.ndarray, ...] | None = None
         self._shapes_theta: np.ndarray | None = None  # the rotation increment the shapes were made with
-        self._rows: tuple[np.ndarray, ...] = ()  # n·T and e·T at the shapes (add_to)
         self._springs: ContactSprings | None = None  # the springs at the shapes (add_to)
 
     def __len__(self) -> int:
@@ -371,10 +370,9 @@ class SolidContactStep:
             self._shapes_theta = ctx.theta
             ta, tb, tra, trb = self._shapes
             # the springs' unit rows n·T and e·T of every contact, whatever its state in the solves
-            self._rows = (directional_rows(g.normal, ta), directional_rows(g.frame, tra),
-                          directional_rows(g.normal, tb), directional_rows(g.frame, trb))
-            normal_a, shear_a, normal_b, shear_b = self._rows
-            self._springs = ContactSprings(a, b, normal_a, normal_b, shear_a, shear_b, g.gap, self.shear0,
+            self._springs = ContactSprings(a, b, directional_rows(g.normal, ta), directional_rows(g.normal, tb),
+                                           directional_rows(g.frame, tra), directional_rows(g.frame, trb),
+                                           g.gap, self.shear0,
                                            self.params.normal_stiffness, self.params.shear_stiffness)
         ta, tb, tra, trb = self._shapes
         # by changes while the shapes stay those of the step (Shi's T at t, not the secant pass's)
@@ -394,16 +392,17 @@ class SolidContactStep:
         g = self.geometry
         # the gap and shear moved by n·(T_a·Δd_a - T_b·Δd_b) and e·(...): the rows n·T, e·T of add_to, so
         # that a solve's check costs 12 products a row, not the 3 × 12 of T·Δd
+        rows = self._springs
+        assert rows is not None
         if is_large(len(dd)):  # one compiled pass over the same rows (other last bits)
-            assert self._springs is not None
-            normal_increment, shear_increment = self._springs.increments(dd)
+            normal_increment, shear_increment = rows.increments(dd)
             self.gap = g.gap + normal_increment
             self.shear = self.shear0 + shear_increment
         else:
-            normal_a, shear_a, normal_b, shear_b = self._rows
             da, db = dd[g.block_a], dd[g.block_b]
-            self.gap = g.gap + (np.einsum("ni,ni->n", normal_a, da) - np.einsum("ni,ni->n", normal_b, db))
-            self.shear = self.shear0 + (np.einsum("nki,ni->nk", shear_a, da) - np.einsum("nki,ni->nk", shear_b, db))
+            self.gap = g.gap + (np.einsum("ni,ni->n", rows.normal_a, da) - np.einsum("ni,ni->n", rows.normal_b, db))
+            self.shear = self.shear0 + (np.einsum("nki,ni->nk", rows.shear_a, da)
+                                        - np.einsum("nki,ni->nk", rows.shear_b, db))
         p = self.params
         self.closed_this_step |= (self.state == OPEN) & (self.gap < 0)
         state, direction, trial_direction, changed, unsettled = next_states_3d(

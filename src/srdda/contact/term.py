@@ -159,13 +159,13 @@ class ContactStep:
     def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         assert self._shapes is not None
         g = self.geometry
-        tv, tq, tr = self._shapes
         if is_large(len(dd)):  # the springs' rows n·T, t·T times Δd: one compiled pass
             assert self._springs is not None
             normal_increment, shear_increment = self._springs.increments(dd)
             self.gap = g.gap + normal_increment
             self.shear = self.shear0 + shear_increment[:, 0]
         else:  # n·(T_v·Δd_v - T_q·Δd_q): the order of sums the paper's rows were made with
+            tv, tq, tr = self._shapes
             ua = np.einsum("nki,ni->nk", tv, dd[g.vertex_block])
             self.gap = g.gap + np.einsum("nk,nk->n", g.normal, ua - np.einsum("nki,ni->nk", tq, dd[g.edge_block]))
             self.shear = self.shear0 + np.einsum("nk,nk->n", g.tangent,
