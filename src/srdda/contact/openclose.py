@@ -19,11 +19,14 @@ its gap exceeds f0·w0 (plus T/k_n), a slip must reverse by more than f0·w0,
 and a sliding contact's friction is re-iterated only while it is off by more
 than the negligible force below (k_s·f0·w0 let a sliding block's acceleration
 err by 1e-3: that force scales with the model, not the block). An open
-contact still closes at any penetration, so the band only ever drops spring
-energy, never adds it (docs/contacts.md, "Open-close
-convergence"). A contact still held closed in the band when the iteration ends
-is committed OPEN (:meth:`srdda.contact.term.ContactStep.commit`): its spring's
-energy is dropped. ``tolerance`` = 0 gives the exact rules.
+contact still closes at any penetration, so no spring starts compressed
+(docs/contacts.md, "Open-close convergence"). A contact still held closed in
+the band when the iteration ends is committed OPEN
+(:meth:`srdda.contact.term.ContactStep.commit`): its spring's energy is dropped.
+The band's pull is not free of work: where a contact's gap shrank in the step
+(g₀ > g > 0), the pull k_n·g does the work k_n·g·(g₀ − g) on the blocks, which
+the ledger books as less ``dissipated_contact`` (measured in docs/contacts.md,
+"The band's pull"). ``tolerance`` = 0 gives the exact rules.
 
 Two additions make impacts converge (docs/contacts.md):
 
@@ -91,7 +94,7 @@ def _next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np
     for c in range(len(state)):
         normal = -kn * gap[c]
         # a closed contact opens once its gap exceeds T/k_n + tolerance (Shi's f0·w0), an open one
-        # closes at any penetration (so the band never adds spring energy)
+        # closes at any penetration (so no spring starts compressed)
         closed = normal >= -tension_force[c] - (kn * tolerance if state[c] != OPEN else 0.0)
         compression = normal if normal > 0.0 else 0.0
         strength = compression * tan_phi[c] + cohesion_force[c]
@@ -149,8 +152,10 @@ def never_held(state: np.ndarray, new_state: np.ndarray, gap: np.ndarray, band: 
     and a closed one open by more than ``band`` (not a rounding at a zero gap).
     Opening is held too once a contact has changed state 2 × ``freeze_after``
     times in the step: it cycles open -> locked -> sliding -> open, each change
-    safe by itself; held closed in tension for the step, its spring only takes
-    energy out (the contact is committed open, its energy dropped).
+    safe by itself; held closed in tension for the step, its spring takes
+    energy out while the blocks separate (the contact is committed open, its
+    energy dropped); where they approached in the step it does the work of
+    the band's pull (module doc).
     """
     cycling = flips >= 2 * freeze_after
     return (((state == LOCKED) & (new_state == SLIDING)) | ((state == OPEN) & (gap < -band))

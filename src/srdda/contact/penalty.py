@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, add_penalty_pairs
+from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
 from .openclose import LOCKED, OPEN
 
 __all__ = ["ContactSprings", "INCREMENTAL_BLOCKS", "is_large", "directional_rows"]
@@ -126,7 +126,7 @@ class ContactSprings:
             flipped = np.flatnonzero(now != before)
             if len(flipped):
                 add_penalty_pairs(change, self.part(flipped, shear, np.where(now[flipped], 1.0, -1.0)), c_p)
-                cross[flipped] += change.pair_blocks[-1]
+                scatter_add(cross, flipped, change.pair_blocks[-1])  # in place: no gathered copy of the blocks
         summed_state[:] = state
         system.diag += diag
         system.rhs += rhs
