@@ -15,7 +15,7 @@ from click.testing import CliRunner
 
 from srdda.bench.models import (BRICK, SLOPE_3D, SLOPES, Slope3DSpec, brick_wall, english_bond_outlines,
                                 english_bond_wall, jointed_slope, jointed_slope_3d, slope_3d_cut, slope_input)
-from srdda.bench.runner import CASES, QUICK, REQUIRED_KEYS, BenchCase, measure
+from srdda.bench.runner import CASES, QUICK, REQUIRED_KEYS, BenchCase, format_table, measure
 from srdda.cli import main
 from srdda.contact.solid_term import SolidContactModel, contact_geometry_3d
 from srdda.contact.term import ContactModel, ContactStep
@@ -104,6 +104,19 @@ def test_bench_quick_json_rows() -> None:
         shares = [r[f"share_{p}"] for p in ("detection", "assembly", "solve", "open_close", "other")]
         assert min(shares) >= 0.0 and sum(shares) == pytest.approx(1.0, abs=1e-9)  # rounding of the sum
         assert r["peak_mb"] > 0
+        assert (r["cg_iterations"], r["cg_iterations_per_solve"]) == (0, None)  # below 500 blocks: direct solves
+
+
+def test_bench_counts_the_conjugate_gradients_iterations() -> None:
+    # 589 blocks: above the 500 of ITERATIVE_LIMIT, so auto solves every system by the block-Jacobi CG
+    case = BenchCase("wall_589", 2, lambda: brick_wall(24, 24), steps=2, quick_steps=1)
+    row = measure(case, 2, "dda0", None, timeout=120.0)
+    assert row["blocks"] == 589 and row["status"] == "completed", row["note"]
+    # the CG iterates at the steps' first solves: the wall starts to load, far from its last increment
+    assert row["cg_iterations"] > row["solves_total"]
+    assert row["cg_iterations_per_solve"] * row["solves_total"] == pytest.approx(row["cg_iterations"], rel=1e-12)
+    table = format_table([row])
+    assert "CG it/solve" in table and f"{row['cg_iterations_per_solve']:.0f}" in table.splitlines()[1]
 
 
 def test_bench_time_limit_gives_a_row_not_a_hang() -> None:

@@ -19,6 +19,11 @@ nothing is patched in the parent):
 * ``rejected_steps``: step attempts whose outcome was a cut (open-close cap,
   displacement or penetration check), counted by a wrapper around
   ``Stepper.step``;
+* ``cg_iterations``: conjugate-gradient iterations of the whole run, what the
+  run's iterative solver records per solve (0 when every solve was direct);
+  ``cg_iterations_per_solve`` divides by the solves it made. With
+  ``solves_per_step`` it tells whether a slow model pays for many solves or
+  for slow ones;
 * ``share_*``: the part of the run's wall time spent (exclusively, nested timed
   calls subtracted) in contact detection (``ContactModel.prepare``, in 3D
   ``SolidContactModel.prepare``), assembly (``Stepper.assemble`` and
@@ -101,6 +106,7 @@ class Probe:
         self.sim_time = 0.0
         self.solves = 0
         self.contacts: list[int] = []
+        self.solvers: list[Any] = []  # the run's solvers, as the engine made them
         self._originals: list[tuple[Any, str, Any]] = []  # (class or module, name, what was there)
 
     def timed(self, phase: str, fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -183,6 +189,7 @@ class _TimedSolver:
     """A linear solver whose solves are counted, timed and stopped at the wall-time limit."""
 
     def __init__(self, inner: Any, probe: Probe) -> None:
+        probe.solvers.append(inner)
         self.name = inner.name
         self._probe = probe
         self._solve = probe.timed("solve", inner.solve)
@@ -192,6 +199,11 @@ class _TimedSolver:
             raise WallTimeLimit
         self._probe.solves += 1
         return self._solve(system, rhs)
+
+
+def cg_iterations(solver: Any) -> list[int]:
+    """The iterations of each conjugate-gradient solve ``solver`` made (``auto``: its iterative backend)."""
+    return list(getattr(getattr(solver, "iterative", solver), "iterations", []))
 
 
 def peak_memory_mb() -> float:
@@ -242,6 +254,7 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
     if status not in ("completed", "time limit"):
         note = status
     n = len(probe.accepted_solves)
+    iterations = [k for solver in probe.solvers for k in cg_iterations(solver)]
     row: dict[str, Any] = {
         "model": case.name, "dim": case.dim, "blocks": arrays.n_blocks, "method": settings.method, "steps": n,
         "dt": settings.dt, "sim_time": probe.sim_time, "steps_per_s": n / wall if wall > 0 else 0.0,
@@ -251,6 +264,8 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
         "steps_requested": steps, "attempts": probe.attempts, "solves_total": probe.solves,
         "mean_accepted_dt": float(np.mean(probe.accepted_dt)) if n else None,
         "contacts_per_attempt": float(np.mean(probe.contacts)) if probe.contacts else 0.0,
+        "cg_iterations": int(sum(iterations)),
+        "cg_iterations_per_solve": float(np.mean(iterations)) if iterations else None,
         "wall_s": wall, "cpu_s": cpu, "steps_per_cpu_s": n / cpu if cpu > 0 else 0.0, "build_s": build_s,
         "status": status, "note": note,
     }
@@ -299,7 +314,7 @@ def _num(x: Any, fmt: str) -> str:
 
 def format_table(rows: list[dict[str, Any]]) -> str:
     """The rows as an aligned text table (time shares in %)."""
-    header = ("model", "blocks", "method", "steps", "dt", "sim time", "steps/s", "solves/step", "rejected",
+    header = ("model", "blocks", "method", "steps", "dt", "sim time", "steps/s", "solves/step", "CG it/solve", "rejected",
               "detect%", "assembly%", "solve%", "open-close%", "other%", "peak MB", "note")
     lines = [header]
     for r in rows:
@@ -307,7 +322,8 @@ def format_table(rows: list[dict[str, Any]]) -> str:
                   for p in (*PHASES, "other")]
         lines.append((r["model"], _num(r["blocks"], "d"), r["method"], f"{r['steps']}/{r.get('steps_requested', '-')}",
                       _num(r["dt"], "g"), _num(r["sim_time"], ".4g"), _num(r["steps_per_s"], ".3g"),
-                      _num(r["solves_per_step"], ".1f"), _num(r["rejected_steps"], "d"), *shares,
+                      _num(r["solves_per_step"], ".1f"), _num(r.get("cg_iterations_per_solve"), ".0f"),
+                      _num(r["rejected_steps"], "d"), *shares,
                       _num(r["peak_mb"], ".0f"), r.get("note", "")))
     widths = [max(len(str(line[i])) for line in lines) for i in range(len(header))]
     return "\n".join("  ".join(str(c).ljust(w) for c, w in zip(line, widths)).rstrip() for line in lines)
