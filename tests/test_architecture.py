@@ -22,9 +22,9 @@ ROOT = Path(srdda.__file__).parent
 SEAM = ("kinematics/", "geometry/")
 # Modules that are 2D by what they are, each with its reason; 3D has its own counterparts.
 TWO_DIMENSIONAL = {
-    "contact/narrowphase.py": "Shi's 2D vertex-edge and vertex-vertex detection",
-    "contact/springs.py": "2D contact geometry: an edge's normal and tangent",
-    "contact/broadphase.py": "2D bounding boxes for shapely's STRtree",
+    "contact/narrowphase2d.py": "Shi's 2D vertex-edge and vertex-vertex detection",
+    "contact/detect2d.py": "2D contact geometry: an edge's normal and tangent",
+    "contact/broadphase2d.py": "2D bounding boxes for shapely's STRtree",
     "model.py": "the 2D model builder (polygons, plane stress/strain materials)",
     "cutmodel.py": "2D cut blocks into a 2D model",
     "history.py": "time histories of 2D vectors",
@@ -40,9 +40,9 @@ TWO_DIMENSIONAL = {
 }
 # Modules that are 3D by what they are, each with its reason; 2D has its own counterparts.
 THREE_DIMENSIONAL = {
-    "contact/polyhedra_broadphase.py": "3D bounding boxes in a hash grid (x, y, z cells)",
-    "contact/polyhedra_narrowphase.py": "vertex-face and edge-edge detection between polyhedra (cross products)",
-    "contact/solid_term.py": "3D contact geometry: face normals, a 2-vector shear in the contact plane",
+    "contact/broadphase3d.py": "3D bounding boxes in a hash grid (x, y, z cells)",
+    "contact/narrowphase3d.py": "vertex-face and edge-edge detection between polyhedra (cross products)",
+    "contact/detect3d.py": "3D contact geometry: face normals, a 2-vector shear in the contact plane",
 }
 DIMENSION_NUMBERS = {2, 3, 6, 12}
 SIZING_CALLS = {"zeros", "ones", "empty", "full", "eye", "identity", "reshape", "broadcast_to", "tile", "repeat"}
@@ -89,7 +89,8 @@ def test_engine_modules_exist():
     names = {p.relative_to(ROOT).as_posix() for p in _engine_modules()}
     # the step, its terms and the run must be among the walked modules (the walk itself is tested)
     assert {"step.py", "term.py", "state.py", "simulation.py", "assembly/system.py", "assembly/blocks.py",
-            "constraints/lagrange.py", "constraints/springs.py", "contact/term.py", "settings.py"} <= names
+            "constraints/lagrange.py", "constraints/springs.py", "contact/pipeline.py", "contact/law.py",
+            "contact/openclose.py", "contact/record.py", "settings.py"} <= names
 
 
 def test_no_dimension_literals_outside_the_seam():

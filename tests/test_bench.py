@@ -17,8 +17,7 @@ from srdda.bench.models import (BRICK, SLOPE_3D, SLOPES, Slope3DSpec, brick_wall
                                 english_bond_wall, jointed_slope, jointed_slope_3d, slope_3d_cut, slope_input)
 from srdda.bench.runner import CASES, QUICK, REQUIRED_KEYS, BenchCase, format_table, measure
 from srdda.cli import main
-from srdda.contact.solid_term import SolidContactModel, contact_geometry_3d
-from srdda.contact.term import ContactModel, ContactStep
+from srdda.contact.pipeline import ContactModel, ContactStep
 from srdda.geometry.jointsets3d import plane_normal
 from srdda.model import Model
 from srdda.settings import RunSettings
@@ -141,10 +140,8 @@ def _initial_gaps(model: Model, settings: RunSettings) -> tuple[np.ndarray, floa
     """Gaps (m) of every contact detected at t = 0 (the run's own detection) and the detection distance d0."""
     arrays = model.arrays()
     params = contact_parameters(arrays, settings, model_half_height(arrays.vertices))
-    detector = SolidContactModel(arrays, params)
-    found, surface = detector.detect(arrays.vertices)
-    geom = contact_geometry_3d(arrays.vertices, detector.mesh, detector.topology, surface, found)
-    return geom.gap, params.distance
+    record = ContactModel(arrays, params).detector.detect(arrays.vertices)
+    return (np.empty(0) if record is None else record.gap), params.distance
 
 
 def test_slope_3d_blocks_volume_and_settings() -> None:
@@ -247,7 +244,7 @@ def test_3d_models_are_listed_and_quick_stays_2d() -> None:
 
 
 def test_tiny_3d_wall_runs_through_the_runner() -> None:
-    engine = (Stepper.step, ContactModel.prepare, SolidContactModel.prepare, ContactStep.converged)
+    engine = (Stepper.step, ContactModel.prepare, ContactStep.converged)
     case = BenchCase("wall3d_tiny", 3, lambda: english_bond_wall(3, 2), steps=2, quick_steps=1)
     row = measure(case, 2, "dda0", None, timeout=120.0)
     assert set(REQUIRED_KEYS) <= set(row) and row["status"] == "completed", row["note"]
@@ -259,4 +256,4 @@ def test_tiny_3d_wall_runs_through_the_runner() -> None:
     shares = [row[f"share_{p}"] for p in ("detection", "assembly", "solve", "open_close", "other")]
     assert min(shares) >= 0.0 and sum(shares) == pytest.approx(1.0, abs=1e-9)  # rounding of the sum
     # the engine is as it was: the probe restored what it wrapped
-    assert (Stepper.step, ContactModel.prepare, SolidContactModel.prepare, ContactStep.converged) == engine
+    assert (Stepper.step, ContactModel.prepare, ContactStep.converged) == engine

@@ -19,7 +19,7 @@ from results_models import two_block_model
 class FakeContacts:
     """Stands in for a contact set: per-contact arrays of varying length and a scalar."""
 
-    vertex: np.ndarray
+    key: np.ndarray
     edge: np.ndarray
     state: np.ndarray
     normal_force: np.ndarray
@@ -58,7 +58,7 @@ def _equal(a: ExtendedState, b: ExtendedState) -> None:
         assert b.contacts is None
         return
     assert b.contacts.energy == a.contacts.energy
-    for name in ("vertex", "edge", "state", "normal_force"):
+    for name in ("key", "edge", "state", "normal_force"):
         got, want = getattr(b.contacts, name), getattr(a.contacts, name)
         assert got.dtype == want.dtype
         np.testing.assert_array_equal(got, want, err_msg=name)
@@ -100,14 +100,22 @@ def test_contact_sets_on_the_state_are_recorded_by_default(tmp_path: Path) -> No
     state = _states(2)[1]  # three contacts
     out = contacts_from_state(arrays, state)
     c = state.contacts
-    np.testing.assert_array_equal(out["point"], state.vertices[c.vertex])
-    np.testing.assert_array_equal(out["normal_force"], c.normal_force)
-    # the foot lies on the contacted edge and the normal is a unit vector perpendicular to it
-    a, b = state.vertices[c.edge], state.vertices[arrays.next_vertex[c.edge]]
-    cross = (b - a)[:, 0] * (out["point_b"] - a)[:, 1] - (b - a)[:, 1] * (out["point_b"] - a)[:, 0]
-    np.testing.assert_allclose(cross, 0.0, atol=1e-12)  # the coordinates are O(1) m
-    np.testing.assert_allclose(np.linalg.norm(out["normal"], axis=1), 1.0, rtol=1e-15)
-    np.testing.assert_allclose(np.einsum("ij,ij->i", out["normal"], b - a), 0.0, atol=1e-15)
+    # every per-contact array of the set, whatever it holds; not its scalars
+    assert set(out) == {"key", "edge", "state", "normal_force"}
+    for name in out:
+        np.testing.assert_array_equal(out[name], getattr(c, name))
+    # a run's contact set: where each contact is, its foot on the other block and its normal
+    resting = srdda.Model(gravity=(0.0, -9.81))
+    resting.add_material("rock", srdda.Material(density=2600.0, young=5e9, poisson=0.3))
+    resting.add_block([[-2, -1], [2, -1], [2, 0], [-2, 0]], "rock", fixed=True)
+    resting.add_block([[0, 0], [1, 0], [1.2, 0.8], [0.1, 1]], "rock")
+    run = srdda.run(resting, srdda.RunSettings(dt=1e-3, n_steps=3))
+    real = contacts_from_state(resting.arrays(), run.final_state)
+    assert {"point", "point_b", "normal", "state", "normal_force", "gap", "shear", "direction"} <= set(real)
+    np.testing.assert_allclose(np.linalg.norm(real["normal"], axis=1), 1.0, rtol=1e-15)
+    across = real["point"] - real["point_b"]  # along the normal: x_b is the foot of x_a
+    cross = across[:, 0] * real["normal"][:, 1] - across[:, 1] * real["normal"][:, 0]
+    np.testing.assert_allclose(cross, 0.0, atol=1e-15)  # the coordinates are O(1) m
     plain = initial_state(arrays, srdda.RunSettings(dt=1e-3, n_steps=1).resolved_method())
     assert contacts_from_state(arrays, plain) is None  # a State without contact sets records none
 

@@ -4,10 +4,11 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda.contact.polyhedra_broadphase import block_boxes_3d, candidate_pairs_3d
-from srdda.contact.polyhedra_narrowphase import EDGE_EDGE, VERTEX_FACE
-from srdda.contact.solid_term import SolidContactModel, contact_geometry_3d
-from srdda.contact.term import ContactParameters
+from srdda.contact import ContactModel, ContactParameters
+from srdda.contact.broadphase3d import candidate_pairs_3d
+from srdda.contact.candidates import block_boxes
+from srdda.contact.detect3d import surface_geometry
+from srdda.contact.narrowphase3d import EDGE_EDGE, VERTEX_FACE
 from srdda.geometry.polyhedron import box, prism
 from srdda.kinematics.shape3d import rotation_matrix_3d
 
@@ -26,13 +27,13 @@ def _arrays(*blocks, fixed=()):
 
 
 def _model(arrays, d0=D0):
-    return SolidContactModel(arrays, ContactParameters(1e9, 4e8, d0, np.radians(3.0), 0.4 * d0))
+    return ContactModel(arrays, ContactParameters(1e9, 4e8, d0, np.radians(3.0), 0.4 * d0))
 
 
-def _detect(arrays):
-    cm = _model(arrays)
-    found, surface = cm.detect(arrays.vertices)
-    return found, contact_geometry_3d(arrays.vertices, cm.mesh, cm.topology, surface, found)
+def _detect(arrays, d0=D0):
+    """The detected features (k, 5) and the contact record (None when there are none)."""
+    record = _model(arrays, d0).detector.detect(arrays.vertices)
+    return (np.empty((0, 5), dtype=np.int64) if record is None else record.features), record
 
 
 def _bar(section, lo, hi, turn, shift):
@@ -156,8 +157,9 @@ def test_penetrating_vertex_beyond_a_thin_plate_is_not_a_contact_with_its_far_fa
     plate = box((-2, -2, -0.01), (2, 2, 0))
     cube = box((0, 0, -0.005), (1, 1, 1))  # bottom 5 mm into a 10 mm plate: nearest way out is the top face
     arr = _arrays(plate, cube)
-    cm = SolidContactModel(arr, ContactParameters(1e9, 4e8, 0.05, np.radians(3.0), 0.02))
-    found, surface = cm.detect(arr.vertices)
+    found, _ = _detect(arr)
+    detector = _model(arr).detector
+    surface = surface_geometry(arr.vertices, detector.mesh, detector.topology, detector.sin_tol)
     cube_on_plate = found[(found[:, 3] == 1) & (found[:, 0] == VERTEX_FACE)]
     assert len(cube_on_plate) == 4
     np.testing.assert_allclose(surface.face_normal[cube_on_plate[:, 2]], [[0, 0, 1]] * 4, atol=1e-15)
@@ -184,7 +186,16 @@ def _faces(arr, b):
 
 def test_block_boxes_3d():
     arr = _arrays(box((0, 0, 0), (1, 2, 3)), box((5, 5, 5), (6, 6, 6)))
-    np.testing.assert_array_equal(block_boxes_3d(arr.vertices, arr.block_ptr), [[0, 0, 0, 1, 2, 3], [5, 5, 5, 6, 6, 6]])
+    np.testing.assert_array_equal(block_boxes(arr.vertices, arr.block_ptr), [[0, 0, 0, 1, 2, 3], [5, 5, 5, 6, 6, 6]])
+
+
+def _deep(arrays):
+    """Features and record with d0 = 0.3 m and 0.125 m allowed depth."""
+    record = ContactModel(arrays, ContactParameters(1e9, 4e8, 0.3, np.radians(3.0), 0.125)).detector.detect(
+        arrays.vertices)
+    if record is None:
+        return np.empty((0, 5), dtype=np.int64), np.empty(0)
+    return record.features, record.gap
 
 
 def test_a_vertex_beside_a_rim_is_no_deep_penetration():
@@ -197,15 +208,11 @@ def test_a_vertex_beside_a_rim_is_no_deep_penetration():
     hanging = convex_hull_polyhedron(np.array([[1.05, 0.5, 0.9], [0.95, 0.3, 1.3], [0.95, 0.7, 1.3],
                                                [1.2, 0.5, 1.5]]))
     arrays = _arrays(cube, hanging, fixed=(0,))
-    cm = SolidContactModel(arrays, ContactParameters(1e9, 4e8, 0.3, np.radians(3.0), 0.125))
-    found, surface = cm.detect(arrays.vertices)
-    geometry = contact_geometry_3d(arrays.vertices, cm.mesh, cm.topology, surface, found)
-    assert not np.any(geometry.gap < -1e-3 * 0.3), (found, geometry.gap)  # nothing deeper than the slack
+    found, gap = _deep(arrays)
+    assert not np.any(gap < -1e-3 * 0.3), (found, gap)  # nothing deeper than the slack
     # the same tetrahedron lowered onto the top face (its lowest vertex 0.01 m into it, above the face) is one
     lowered = convex_hull_polyhedron(np.array([[0.9, 0.5, 0.99], [0.8, 0.3, 1.3], [0.8, 0.7, 1.3], [1.05, 0.5, 1.5]]))
     arrays = _arrays(cube, lowered, fixed=(0,))
-    cm = SolidContactModel(arrays, ContactParameters(1e9, 4e8, 0.3, np.radians(3.0), 0.125))
-    found, surface = cm.detect(arrays.vertices)
-    geometry = contact_geometry_3d(arrays.vertices, cm.mesh, cm.topology, surface, found)
-    deep = (found[:, 0] == VERTEX_FACE) & np.isclose(geometry.gap, -0.01)
-    assert deep.sum() == 1, (found, geometry.gap)
+    found, gap = _deep(arrays)
+    deep = (found[:, 0] == VERTEX_FACE) & np.isclose(gap, -0.01)
+    assert deep.sum() == 1, (found, gap)

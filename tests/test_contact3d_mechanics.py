@@ -12,7 +12,8 @@ import srdda
 from srdda.cases.contacts3d import incline_case
 from srdda.cases.slope3d import incline_acceleration
 from srdda.contact.openclose import LOCKED, OPEN, SLIDING
-from srdda.contact.solid_term import SolidContactSet, next_states_3d
+from srdda.contact import ContactModel, ContactParameters, ContactSet
+from srdda.contact.openclose import next_states
 from srdda.geometry.polyhedron import box
 from srdda.io.results_store import ResultsStore, read_results, resume
 
@@ -98,8 +99,11 @@ def test_open_close_rules_with_a_shear_vector():
     slip = shear.copy()
     tan_phi = np.full(n, 0.5)  # strength 500 N: k_s|s| = 400 N holds, 1200 N does not
     zero = np.zeros(n)
-    new, friction, trial, changed, _ = next_states_3d(state, direction, gap, shear, slip, kn, ks, tan_phi, zero,
-                                                      zero, np.zeros(n, bool), np.full(n, 1000.0))
+    strength = np.maximum(-kn * gap, 0.0) * tan_phi
+    dragged = np.ones(n, dtype=bool)  # vertex-face contacts: their sliding springs are dragged at their strength
+    new, friction, trial, changed, _ = next_states(state, direction, gap, shear, slip, np.full(n, kn), np.full(n, ks),
+                                                   strength, tan_phi, zero, np.zeros(n, bool), np.full(n, 1000.0),
+                                                   dragged)
     assert new.tolist() == [LOCKED, LOCKED, SLIDING, SLIDING, LOCKED, OPEN]
     np.testing.assert_allclose(friction[2], [0, 1])  # starts to slide along its spring's load
     np.testing.assert_allclose(friction[3], [1, 0])  # keeps its direction for the step
@@ -109,8 +113,16 @@ def test_open_close_rules_with_a_shear_vector():
 
 
 def test_the_empty_contact_set_has_the_shapes_of_a_full_one():
-    empty = SolidContactSet.empty()
+    m = srdda.Model(gravity=(0.0, 0.0, -G))
+    m.add_material("rock", srdda.Material(2600.0, 1e10, 0.25))
+    m.add_polyhedron(*box((-1, -1, -1), (1, 1, 0)), "rock", fixed=True)
+    m.add_polyhedron(*box((0, 0, 0.001), (0.5, 0.5, 0.5)), "rock")
+    arrays = m.arrays()
+    record = ContactModel(arrays, ContactParameters(1e9, 4e8, 0.05, np.radians(3.0), 0.02)).detector.detect(
+        arrays.vertices)
+    empty = ContactSet.empty(record)
     assert empty.direction.shape == (0, 2) and empty.point.shape == (0, 3) and empty.max_penetration == 0.0
+    assert empty.features.shape == (0, record.features.shape[1])
 
 
 def test_resume_with_3d_contacts_equals_the_uninterrupted_run(tmp_path: Path):
@@ -132,7 +144,7 @@ def test_resume_with_3d_contacts_equals_the_uninterrupted_run(tmp_path: Path):
     path = tmp_path / "drop.h5"
     first = srdda.run(model(), dataclasses.replace(settings, n_steps=stop),
                       recorders=[ResultsStore(path, settings, flush_every=10)])
-    assert isinstance(first.final_state.contacts, SolidContactSet)
+    assert isinstance(first.final_state.contacts, ContactSet)
     got = resume(path, model().arrays()).final_state
     ref = reference.final_state
     assert got.step == ref.step

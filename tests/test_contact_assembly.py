@@ -18,7 +18,7 @@ import srdda
 from srdda.bench.models import brick_wall, english_bond_wall
 from srdda.contact.openclose import LOCKED, OPEN, SLIDING
 from srdda.contact.penalty import directional_rows
-from srdda.contact.term import ContactTerm
+from srdda.contact.pipeline import ContactTerm
 from srdda.solvers import get_solver
 from srdda.state import initial_state
 from srdda.step import Stepper

@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda.contact import VERTEX_EDGE, VERTEX_VERTEX, ContactModel, ContactParameters, candidate_pairs
-from srdda.contact.broadphase import block_boxes
+from srdda.contact import ContactModel, ContactParameters
+from srdda.contact.broadphase2d import candidate_pairs_2d as candidate_pairs
+from srdda.contact.candidates import block_boxes
+from srdda.contact.narrowphase2d import VERTEX_EDGE, VERTEX_VERTEX
 from srdda.contact.transfer import match_previous
 
 D0 = 0.05
@@ -21,7 +23,8 @@ def _model(*blocks):
 
 def _detect(arrays, d0=D0):
     cm = ContactModel(arrays, ContactParameters(1e9, 4e8, d0, np.radians(3.0), 0.4 * d0))
-    found = cm.detect(arrays.vertices)
+    record = cm.detector.detect(arrays.vertices)
+    found = np.empty((0, 3), dtype=np.int64) if record is None else record.features
     return {(tuple(arrays.vertices[v]), tuple(arrays.vertices[e]), int(k)) for v, e, k in found}
 
 
@@ -222,7 +225,7 @@ def test_kept_candidates_are_the_fresh_broad_phase_in_its_order(dim):
     # kept list, filtered, must be exactly the broad phase run afresh, pairs and order; and the broad
     # phase runs again only after some vertex moved more than the margin's half (here about every 2-3 steps)
     from srdda.contact.candidates import KeptCandidates
-    from srdda.contact.polyhedra_broadphase import candidate_pairs_3d
+    from srdda.contact.broadphase3d import candidate_pairs_3d
     find = candidate_pairs if dim == 2 else candidate_pairs_3d
     rng = np.random.default_rng(7)
     n, d0 = 200, 0.1

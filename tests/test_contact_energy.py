@@ -1,4 +1,6 @@
 """Contacts may dissipate energy but must not create it; the rockfall example (paper 4.5)."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -91,6 +93,15 @@ def test_rockfall_tables_have_every_row(rockfall_srdda):
     assert t7["omega_after_contact_1"]["paper"] == pytest.approx(-8.85595077)
 
 
+def _carried(step, state, direction, reference, bonded, normal_force, shear):
+    """A ContactSet of the contacts of ``step`` with these per-contact values (2D: one shear component)."""
+    r = step.record
+    column = lambda values: np.asarray(values, dtype=float)[:, None]  # noqa: E731
+    return ContactSet(r.key, r.features, r.block_a, r.block_b, np.asarray(state, dtype=np.int8), column(direction),
+                      column(reference), np.asarray(bonded), np.asarray(normal_force, dtype=float),
+                      np.zeros(len(r)), column(shear), r.point_a, r.point_b, r.normal, 0.0)
+
+
 def test_contact_transfer_keeps_reference_state_and_bond():
     # A locked contact found again keeps its shear reference point, state, normal force and bond;
     # a sliding one restarts its reference at the projection (Shi); a new one is not bonded.
@@ -103,17 +114,14 @@ def test_contact_transfer_keeps_reference_state_and_bond():
     cm = ContactModel(arrays, params)
     first = cm.prepare(arrays.vertices, None, first_step=True)
     assert len(first) == 2 and np.all(first.state == LOCKED) and np.all(first.bonded)
-    found = first.found
-    previous = ContactSet(found[:, 0], found[:, 1], found[:, 2], np.array([LOCKED, SLIDING], dtype=np.int8),
-                          np.array([0, 1], dtype=np.int8), np.array([0.123, 0.456]), np.array([True, False]),
-                          np.array([7.0, 8.0]), np.zeros(2), np.zeros(2), 0.0)
+    previous = _carried(first, [LOCKED, SLIDING], [0, 1], [0.123, 0.456], [True, False], [7.0, 8.0], [0.0, 0.0])
     moved = arrays.vertices.copy()
     moved[arrays.vertex_block == 1] += [0.01, 0.0]  # the upper block slid 1 cm
     term = cm.prepare(moved, previous, first_step=False)
-    assert np.array_equal(term.found, found)
-    assert term.state.tolist() == [LOCKED, SLIDING] and term.sign.tolist() == [0, 1]
-    assert term.reference[0] == 0.123  # locked: same material reference point on the edge
-    assert term.reference[1] == pytest.approx(term.geometry.projection[1])  # sliding: restarts
+    assert np.array_equal(term.record.features, first.record.features)
+    assert term.state.tolist() == [LOCKED, SLIDING] and term.direction[:, 0].tolist() == [0, 1]
+    assert term.reference[0, 0] == 0.123  # locked: same material reference point on the edge
+    assert term.reference[1, 0] == pytest.approx(term.record.start_reference[1, 0])  # sliding: restarts
     assert term.bonded.tolist() == [True, False]
     assert term.normal_force.tolist() == [7.0, 8.0]
     fresh = cm.prepare(moved, None, first_step=False)
@@ -132,21 +140,19 @@ def test_a_sliding_contact_that_came_to_rest_starts_the_next_step_locked():
     arrays = m.arrays()
     band = 1e-6  # f0·w0 (m)
     cm = ContactModel(arrays, ContactParameters(1e9, 4e8, 0.05, np.radians(3.0), 0.02, tolerance=band))
-    found = cm.prepare(arrays.vertices, None, first_step=True).found
-    slid = np.array([0.5 * band, -5.0 * band])  # the first within the band, the second clearly sliding
-    previous = ContactSet(found[:, 0], found[:, 1], found[:, 2], np.array([SLIDING, SLIDING], dtype=np.int8),
-                          np.array([1, -1], dtype=np.int8), np.array([0.123, 0.456]), np.array([False, False]),
-                          np.array([7.0, 8.0]), np.zeros(2), slid, 0.0)
+    first = cm.prepare(arrays.vertices, None, first_step=True)
+    slid = [0.5 * band, -5.0 * band]  # the first within the band, the second clearly sliding
+    previous = _carried(first, [SLIDING, SLIDING], [1, -1], [0.123, 0.456], [False, False], [7.0, 8.0], slid)
     term = cm.prepare(arrays.vertices, previous, first_step=False)
-    assert term.state.tolist() == [LOCKED, SLIDING] and term.sign.tolist() == [0, -1]
-    assert term.reference[0] == pytest.approx(term.geometry.projection[0])  # unstretched: no stored force
-    assert term.shear0[0] == pytest.approx(0.0, abs=1e-15)
+    assert term.state.tolist() == [LOCKED, SLIDING] and term.direction[:, 0].tolist() == [0, -1]
+    assert term.reference[0, 0] == pytest.approx(term.record.start_reference[0, 0])  # unstretched: no stored force
+    assert term.shear0[0, 0] == pytest.approx(0.0, abs=1e-15)
     # the step's slip is what an accepted step commits for a sliding contact (its spring's stretch when locked)
     step = cm.prepare(arrays.vertices, None, first_step=False)
     step.state[:] = SLIDING
-    step.shear = step.shear0 + np.array([3e-7, -2e-6])
+    step.shear = step.shear0 + np.array([[3e-7], [-2e-6]])
     committed = step.commit()
-    assert committed.shear == pytest.approx([3e-7, -2e-6], abs=1e-15)
+    assert committed.shear[:, 0] == pytest.approx([3e-7, -2e-6], abs=1e-15)
 
 
 def test_rockfall_model_file_is_the_builder_model():
@@ -158,7 +164,9 @@ def test_rockfall_model_file_is_the_builder_model():
     a, b = model.arrays(), built.arrays()
     assert np.allclose(a.vertices, b.vertices, rtol=0, atol=1e-12)
     assert np.array_equal(a.block_fixed, b.block_fixed) and np.allclose(a.velocity, b.velocity)
-    assert np.allclose(a.joint_properties, b.joint_properties) and np.allclose(a.points, b.points)
+    assert all(np.allclose(getattr(a.joints, f.name), getattr(b.joints, f.name), equal_nan=True)
+               for f in dataclasses.fields(a.joints))
+    assert np.allclose(a.points, b.points)
     assert settings == built_settings
 
 
@@ -216,9 +224,13 @@ def test_new_vertex_vertex_contact_starts_with_an_unstretched_shear_spring():
     params = ContactParameters(2.5e11, 1e11, 0.03125, np.radians(3.0), 0.0125)
     term = ContactModel(arrays, params).prepare(arrays.vertices, None, first_step=True)
     overhang_corner = int(arrays.block_ptr[1]) + 1
-    vv = (term.found[:, 0] == overhang_corner) & (term.found[:, 2] == 1)
+    features = term.record.features
+    vv = (features[:, 0] == overhang_corner) & (features[:, 2] == 1)
     assert np.count_nonzero(vv) == 1 and term.state[vv][0] == LOCKED
-    assert term.geometry.projection[vv][0] == 1.0 and term.reference[vv][0] == pytest.approx(1.02)
+    foot = term.record.point_b[vv][0]
+    edge_start, edge = term.record.anchor_b[vv][0], term.record.axes_b[vv][0, 0]
+    assert np.dot(foot - edge_start, edge) / np.dot(edge, edge) == pytest.approx(1.0)  # the foot: clipped to the end
+    assert term.reference[vv][0, 0] == pytest.approx(1.02)
     assert np.max(np.abs(term.shear0)) < 1e-12
 
 

@@ -139,13 +139,14 @@ def test_contact_sees_the_displacement_the_update_makes(method, bound):
     res = srdda.run(model, srdda.RunSettings(dt=2e-3, n_steps=1, method=method, penalty=1e10))
     state, c = res.final_state, res.final_state.contacts
     arrays = model.arrays()
-    p0 = state.vertices[c.edge]
-    d = state.vertices[arrays.next_vertex[c.edge]] - p0
+    vertex, edge = c.features[:, 0], c.features[:, 1]  # the 2D detector's [vertex, edge start, kind]
+    p0 = state.vertices[edge]
+    d = state.vertices[arrays.next_vertex[edge]] - p0
     normal = np.column_stack([d[:, 1], -d[:, 0]]) / np.linalg.norm(d, axis=1)[:, None]
-    actual = np.einsum("nk,nk->n", state.vertices[c.vertex] - p0, normal)
+    actual = np.einsum("nk,nk->n", state.vertices[vertex] - p0, normal)
     assert np.all(c.closed) and np.all(c.gap < 0)  # the corner was driven into the base
     assert np.max(np.abs(c.gap - actual)) < bound
     if method == "srdda":
         dda1 = srdda.run(model, srdda.RunSettings(dt=2e-3, n_steps=1, method="dda1", penalty=1e10)).final_state
-        actual1 = np.einsum("nk,nk->n", dda1.vertices[dda1.contacts.vertex] - p0, normal)
+        actual1 = np.einsum("nk,nk->n", dda1.vertices[dda1.contacts.features[:, 0]] - p0, normal)
         assert np.max(np.abs(dda1.contacts.gap - actual1)) > 1e-7  # the test can tell the difference

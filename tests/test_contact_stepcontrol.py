@@ -71,7 +71,7 @@ def test_contacts_are_committed_on_the_state():
     m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
     res = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=3))
     contacts = res.final_state.contacts
-    assert isinstance(contacts, ContactSet) and len(contacts.vertex) == 2
+    assert isinstance(contacts, ContactSet) and len(contacts.key) == 2
     assert np.all(contacts.closed) and contacts.energy > 0
 
 

@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda.contact.solid_term import SolidContactModel
-from srdda.contact.term import ContactParameters
+from srdda.contact import ContactModel, ContactParameters
 from srdda.geometry.polyhedron import box
 from srdda.io.modelfile import ModelFileError, model_from_dict
 
@@ -32,10 +31,10 @@ def _model(top_joint: str | None) -> srdda.Model:
 @pytest.mark.parametrize("top_joint, friction", [(None, 20.0), ("rough", 40.0)])
 def test_a_contact_on_a_face_takes_the_face_joint_material(top_joint, friction):
     arrays = _model(top_joint).arrays()
-    contacts = SolidContactModel(arrays, ContactParameters(1e10, 4e9, 0.01, np.radians(3.0), 0.004))
+    contacts = ContactModel(arrays, ContactParameters(1e10, 4e9, 0.01, np.radians(3.0), 0.004))
     step = contacts.prepare(arrays.vertices, None, True)
     # the block's four bottom corners touch the plane's top face: each contact's friction is the face's
-    np.testing.assert_allclose(step.tan_phi, np.tan(np.radians(friction)), rtol=1e-15)
+    np.testing.assert_allclose(step.response.friction, np.tan(np.radians(friction)), rtol=1e-15)
 
 
 @pytest.mark.slow

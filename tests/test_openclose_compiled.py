@@ -1,11 +1,12 @@
-"""The 2D open-close rules and the friction's secant step, compiled contact by contact, against their
-whole-array form (the code before they were compiled), bit for bit: the paper's rows depend on every bit."""
+"""The open-close rules and the friction's secant step, compiled contact by contact, against their whole-array
+forms (the code before they were compiled, and before 2D and 3D shared them), bit for bit: the paper's rows
+depend on every bit."""
 from __future__ import annotations
 
 import numpy as np
 
 from srdda.contact.openclose import LOCKED, OPEN, SLIDING, next_states
-from srdda.contact.term import _secant_normal
+from srdda.contact.pipeline import _secant_normal
 
 
 def _array_rules(state, sign, gap, shear, kn, ks, tan_phi, cohesion_force, tension_force, closed_this_step,
@@ -52,8 +53,68 @@ def test_compiled_open_close_rules_equal_the_array_rules_bit_for_bit():
         for settled in (0.0, rng.uniform(0.0, 10.0, n)):
             args = (state, sign, gap, shear, kn, ks, tan_phi, cohesion, tension, closed_this_step,
                     friction_normal, 1e-3, tolerance, settled)
-            for got, want in zip(next_states(*args), _array_rules(*args)):
-                assert got.dtype == want.dtype and np.array_equal(got, want)
+            want = _array_rules(*args)
+            strength = np.maximum(-kn * gap, 0.0) * tan_phi + cohesion
+            got = next_states(state, sign[:, None].astype(float), gap, shear[:, None], shear[:, None] * 0.5,
+                              np.full(n, kn), np.full(n, ks), strength, tan_phi, tension, closed_this_step,
+                              friction_normal, np.zeros(n, dtype=bool), 1e-3, tolerance, settled)
+            new_state, new_direction, _, changed, unsettled = got
+            assert new_state.dtype == want[0].dtype and np.array_equal(new_state, want[0])
+            assert np.array_equal(new_direction[:, 0], want[1].astype(float))
+            assert np.array_equal(changed, want[2]) and np.array_equal(unsettled, want[3])
+
+
+def _array_rules_3d(state, direction, gap, shear, slip, kn, ks, tan_phi, cohesion_force, tension_force,
+                    closed_this_step, friction_normal, friction_tolerance):
+    """The 3D rules as they were written for polyhedra alone (contacts whose sliding spring is dragged)."""
+    normal = -kn * gap
+    closed = normal >= -tension_force
+    strength = np.maximum(normal, 0.0) * tan_phi + cohesion_force
+    size = np.linalg.norm(shear, axis=1)
+    holds = ks * size <= strength
+    sliding = state == SLIDING
+    limit = strength / ks
+    trial = np.where(sliding[:, None], direction * limit[:, None] + slip, shear)
+    trial_size = np.linalg.norm(trial, axis=1)
+    unit = np.where(trial_size[:, None] > 0, trial / np.where(trial_size > 0, trial_size, 1.0)[:, None], 0.0)
+    reversed_slip = sliding & (np.einsum("nk,nk->n", slip, direction) < 0) & (strength > 0)
+    stays = ~holds & ~reversed_slip & (state != OPEN)
+    glancing = (state == LOCKED) & ~closed & closed_this_step
+    new_state = np.where(closed, np.where(stays, SLIDING, LOCKED), OPEN)
+    new_state = np.where(glancing, SLIDING, new_state).astype(np.int8)
+    now_sliding = new_state == SLIDING
+    trial_direction = np.where(now_sliding[:, None], unit, 0.0)
+    new_direction = np.where((now_sliding & sliding)[:, None], direction, trial_direction)
+    changed = new_state != state
+    force = np.maximum(normal, 0.0)
+    unsettled = now_sliding & sliding & (tan_phi > 0) & (np.abs(force - friction_normal) > friction_tolerance * force)
+    return new_state, new_direction, trial_direction, changed, unsettled
+
+
+def test_compiled_rules_of_dragged_springs_equal_the_3d_array_rules_bit_for_bit():
+    # the rules of a contact whose sliding spring is dragged at its strength (3D vertex-face), with no band
+    # and no negligible force, are those the polyhedra had before 2D and 3D shared one set
+    rng = np.random.default_rng(13)
+    n, kn, ks = 20_000, 5e10, 2e10
+    state = _pick(rng, n, OPEN, SLIDING, LOCKED).astype(np.int8)
+    angle = rng.uniform(0, 2 * np.pi, n)
+    direction = np.where((state == SLIDING)[:, None], np.column_stack([np.cos(angle), np.sin(angle)]), 0.0)
+    gap = np.where(rng.random(n) < 0.1, _pick(rng, n, 0.0, -0.0), rng.normal(scale=1e-6, size=n))
+    shear = np.where(rng.random((n, 2)) < 0.1, 0.0, rng.normal(scale=1e-6, size=(n, 2)))
+    slip = np.where(rng.random((n, 2)) < 0.1, 0.0, rng.normal(scale=1e-6, size=(n, 2)))
+    tan_phi = _pick(rng, n, 0.0, np.tan(np.radians(30.0)))
+    cohesion = np.where(rng.random(n) < 0.2, rng.uniform(0, 1e4, n), 0.0)
+    tension = np.where(rng.random(n) < 0.2, rng.uniform(0, 1e4, n), 0.0)
+    closed_this_step = rng.random(n) < 0.3
+    friction_normal = np.maximum(-kn * gap, 0.0) * (1.0 + _pick(rng, n, 0.0, 1e-4, 1e-2))
+    want = _array_rules_3d(state, direction, gap, shear, slip, kn, ks, tan_phi, cohesion, tension, closed_this_step,
+                           friction_normal, 1e-3)
+    strength = np.maximum(-kn * gap, 0.0) * tan_phi + cohesion
+    got = next_states(state, direction, gap, shear, slip, np.full(n, kn), np.full(n, ks), strength, tan_phi, tension,
+                      closed_this_step, friction_normal, np.ones(n, dtype=bool), 1e-3, 0.0, 0.0)
+    for g, w in zip(got, want):
+        assert np.array_equal(g, w)
+    assert 0 < np.count_nonzero(got[0] == SLIDING) < n
 
 
 def test_compiled_secant_step_equals_the_array_step_bit_for_bit():

@@ -2,11 +2,15 @@
 
 Random convex blocks (the convex hull of 6 to 12 random points on a randomly
 stretched sphere), dropped at random orientations, speeds and spins on a
-fixed base under srdda and dda1: the energy balance (kinetic + potential +
-strain + contact springs + the friction dissipated so far) never rises above
-its initial value by more than 1e-6 of the block's energy above the base
-(measured: rounding, below 1e-13). Contacts dissipate or store energy; they
-never create it.
+fixed base under srdda and dda1: the mechanical energy plus what friction
+dissipated so far (kinetic + potential + strain + contact springs + the
+ledger's ``dissipated_friction``) never rises above its initial value by more
+than 1e-6 of the block's energy above the base (measured: rounding, below
+1e-13). Contacts dissipate or store energy; they never create it. Under srdda
+the whole balance, with the penalty's loss ``dissipated_contact`` booked too,
+keeps that bound; dda1's post-adjusted rotation moves the contact points off
+the linear motion the ledger books the springs' work over, so its balance
+moves by up to about 1e-4 of the impact's loss in single steps.
 """
 from __future__ import annotations
 
@@ -62,7 +66,10 @@ def test_a_dropped_polyhedron_never_creates_energy(block, height, v, omega, turn
     names = list(result.energy[0])
     energy = result.array("energy")
     balance = energy[:, names.index("balance")]
+    not_booked = balance - energy[:, names.index("dissipated_contact")]  # the penalty's loss counted as a loss
     arrays = m.arrays()
     centroid_height = arrays.moments(arrays.vertices).centroid[1, 2]
     scale = energy[0, names.index("kinetic")] + abs(G) * arrays.block_mass[1] * centroid_height
-    assert np.max(balance - balance[0]) <= 1e-6 * scale
+    assert np.max(not_booked - not_booked[0]) <= 1e-6 * scale
+    if method == "srdda":
+        assert np.max(balance - balance[0]) <= 1e-6 * scale

@@ -16,7 +16,7 @@ kept constraint (srdda, dda0), not for dda1's post-adjustment; D_dashpots
 (``dissipated``): c|Δx_rel|²/Δt per step; D_friction (``dissipated_friction``):
 the work the sliding contacts' Coulomb forces took out, -Σ F·Δs with F the
 friction force of the step's last solve and Δs the slip of the contact vertex
-along the edge over the step (:meth:`srdda.contact.term.ContactStep.work`);
+along the edge over the step (:meth:`srdda.contact.pipeline.ContactStep.work`);
 D_contact (``dissipated_contact``) and D_springs (``dissipated_springs``): the
 work the contact penalty springs and the springs (fixed points, point springs,
 springs) did on the blocks with their step force -k(g + c_p·Δg), minus the

@@ -22,7 +22,7 @@ from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_p
 from .kinematics.blocktype import PLANE, SOLID, BlockType, block_type_of_dimension
 from .kinematics.shape3d import elasticity_matrix_3d
 
-__all__ = ["JointMaterial", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
+__all__ = ["JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
 
 
 class ModelError(ValueError):
@@ -60,11 +60,21 @@ class Material:
 
 @dataclass(frozen=True)
 class JointMaterial:
-    """Mohr-Coulomb joint: friction angle (degrees), cohesion (Pa), tensile strength (Pa)."""
+    """Mohr-Coulomb joint: friction angle (degrees), cohesion (Pa), tensile strength (Pa), and optionally
+    its normal and shear stiffness per unit area (Pa/m, as UDEC's and 3DEC's joint kn and ks).
+
+    Without stiffnesses a contact on the joint takes the run's contact penalty
+    (``contact_penalty``, N/m per contact: per metre of thickness in 2D), the
+    shear stiffness ``shear_ratio`` × that; with them, a contact's springs are
+    the joint's stiffness × the joint area it stands for (docs/contacts.md,
+    "Contact stiffness"). A shear stiffness needs a normal one.
+    """
 
     friction_angle: float = 0.0
     cohesion: float = 0.0
     tensile_strength: float = 0.0
+    normal_stiffness: float | None = None
+    shear_stiffness: float | None = None
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.friction_angle < 90.0:
@@ -73,6 +83,31 @@ class JointMaterial:
             raise ModelError(f"joint cohesion must be finite and >= 0, got {self.cohesion}")
         if not 0 <= self.tensile_strength < np.inf:
             raise ModelError(f"joint tensile_strength must be finite and >= 0, got {self.tensile_strength}")
+        for name in ("normal_stiffness", "shear_stiffness"):
+            value = getattr(self, name)
+            if value is not None and not 0 < value < np.inf:
+                raise ModelError(f"joint {name} must be finite and > 0 (Pa/m), got {value}")
+        if self.shear_stiffness is not None and self.normal_stiffness is None:
+            raise ModelError("joint shear_stiffness needs a normal_stiffness (Pa/m) too")
+
+
+@dataclass(frozen=True)
+class JointTable:
+    """The model's joint materials as arrays, one row per joint (row 0: the default joint)."""
+
+    friction_angle: np.ndarray  # (nj,) rad
+    cohesion: np.ndarray  # (nj,) Pa
+    tensile_strength: np.ndarray  # (nj,) Pa
+    normal_stiffness: np.ndarray  # (nj,) Pa/m; nan: the run's contact penalty
+    shear_stiffness: np.ndarray  # (nj,) Pa/m; nan: shear_ratio × the normal stiffness
+
+    @classmethod
+    def of(cls, joints: Sequence[JointMaterial]) -> JointTable:
+        def column(name: str) -> np.ndarray:
+            return np.array([np.nan if getattr(j, name) is None else getattr(j, name) for j in joints], dtype=float)
+
+        return cls(np.radians([j.friction_angle for j in joints]), column("cohesion"), column("tensile_strength"),
+                   column("normal_stiffness"), column("shear_stiffness"))
 
 
 def elasticity_matrix(mat: Material) -> np.ndarray:
@@ -85,10 +120,6 @@ def elasticity_matrix(mat: Material) -> np.ndarray:
     return c * np.array([[1 - nu, nu, 0], [nu, 1 - nu, 0], [0, 0, (1 - 2 * nu) / 2]])
 
 
-
-
-# columns of ModelArrays.joint_properties
-JOINT_FRICTION, JOINT_COHESION, JOINT_TENSION = range(3)
 
 Load = TimeHistory  # a force (N) as a function of time: constant, table, sine or callable of t
 
@@ -138,7 +169,7 @@ class ModelArrays:
     block_fixed: np.ndarray  # (nb,) bool: the block does not move (ground, slope)
     block_material: np.ndarray  # (nb,) index into the model's materials
     edge_joint: np.ndarray  # (nv,) joint material of the edge starting at each vertex, -1 = by materials
-    joint_properties: np.ndarray  # (nj, 3): friction angle (rad), cohesion (Pa), tensile strength (Pa)
+    joints: JointTable  # the joint materials, row 0 the default joint
     joint_by_materials: np.ndarray  # (nm, nm) joint index for a pair of block materials
     links: ConstraintArrays  # hinges, springs, prescribed motion
     mesh: PolyhedronMesh | None = None  # the faces of 3D blocks (None in 2D)
@@ -643,7 +674,7 @@ class Model:
             ia, ib = mat_names.index(a), mat_names.index(b)
             by_mats[ia, ib] = by_mats[ib, ia] = joint_names.index(name) + 1
         def joint_rows(named: tuple[str | None, ...] | None, n: int) -> np.ndarray:
-            """Rows of joint_properties named per edge or face, -1 where the block materials choose."""
+            """Rows of the joint table named per edge or face, -1 where the block materials choose."""
             return np.full(n, -1) if named is None else np.array([-1 if j is None else joint_names.index(j) + 1
                                                                    for j in named])
 
@@ -679,8 +710,7 @@ class Model:
             block_fixed=np.array([b.fixed for b in self.blocks], dtype=bool),
             block_material=np.array([b.material for b in self.blocks], dtype=np.int64),
             edge_joint=edge_joint,
-            joint_properties=np.array([[np.radians(j.friction_angle), j.cohesion, j.tensile_strength]
-                                       for j in joints]),
+            joints=JointTable.of(joints),
             joint_by_materials=by_mats,
             links=links,
             mesh=mesh,

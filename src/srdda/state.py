@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .contact.term import ContactSet
+from .contact.pipeline import ContactSet
 from .geometry.polygon import BlockMoments
 from .integrators.methods import Method
 from .model import ModelArrays

@@ -23,10 +23,8 @@ import numpy as np
 from .assembly.blocks import GyroscopicTerm, block_terms
 from .assembly.system import BlockSystem
 from .constraints import point_terms
-from .contact.solid_term import SolidContactModel, SolidContactTerm
-from .contact.term import ContactModel, ContactParameters, ContactTerm
+from .contact.pipeline import ContactModel, ContactParameters, ContactTerm
 from .integrators.methods import Method
-from .kinematics.blocktype import PLANE
 from .integrators.secant import SecantPass
 from .model import ModelArrays
 from .settings import RunSettings
@@ -102,11 +100,10 @@ class Stepper:
         if settings.contacts and arrays.n_blocks > 1:
             w0 = model_half_height(arrays.vertices)
             params = contact_parameters(arrays, settings, w0)
-            model = ContactModel(arrays, params) if bt is PLANE else SolidContactModel(arrays, params)
+            model = ContactModel(arrays, params)
             if np.any(model.can_touch):
-                term = ContactTerm if bt is PLANE else SolidContactTerm
-                self.terms.append(term(model, settings.open_close_max_iterations,
-                                       settings.max_displacement_ratio * w0, settings.dt))
+                self.terms.append(ContactTerm(model, settings.open_close_max_iterations,
+                                              settings.max_displacement_ratio * w0, settings.dt))
         self.secant = SecantPass(settings.secant_tolerance, settings.secant_max_iterations)
 
     def begin(self, state: State, dt: float) -> tuple[StepContext, list[Term]]:

@@ -20,6 +20,7 @@ STANDARD_GRAVITY = 9.80665  # m/s², exact by definition (the pound-force is def
 UNITS: dict[str, dict[str, float]] = {
     "pressure": {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "N/m2": 1.0, "N/m^2": 1.0},
     "stiffness": {"N/m": 1.0, "kN/m": 1e3, "MN/m": 1e6, "GN/m": 1e9},
+    "joint stiffness": {"Pa/m": 1.0, "kPa/m": 1e3, "MPa/m": 1e6, "GPa/m": 1e9, "N/m3": 1.0, "N/m^3": 1.0},
     "density": {"kg/m3": 1.0, "kg/m^3": 1.0, "t/m3": 1e3, "t/m^3": 1e3, "g/cm3": 1e3, "g/cm^3": 1e3},
     "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "km": 1e3},
     "time": {"s": 1.0, "ms": 1e-3},

@@ -25,12 +25,11 @@ nothing is patched in the parent):
   ``solves_per_step`` it tells whether a slow model pays for many solves or
   for slow ones;
 * ``share_*``: the part of the run's wall time spent (exclusively, nested timed
-  calls subtracted) in contact detection (``ContactModel.prepare``, in 3D
-  ``SolidContactModel.prepare``), assembly (``Stepper.assemble`` and
-  ``base_system``: every term's ``add_to``, and ``BlockSystem`` to
-  sparse/dense), the linear solve (the solver's ``solve`` minus the assembly
-  it calls) and the open-close bookkeeping (``ContactStep.converged``/``commit``,
-  in 3D ``SolidContactStep``'s); ``share_other`` is the rest (the kinematic
+  calls subtracted) in contact detection (``ContactModel.prepare``),
+  assembly (``Stepper.assemble`` and ``base_system``: every term's
+  ``add_to``, and ``BlockSystem`` to sparse/dense), the linear solve (the
+  solver's ``solve`` minus the assembly it calls) and the open-close
+  bookkeeping (``ContactStep.converged``/``commit``); ``share_other`` is the rest (the kinematic
   update, recording).
 """
 from __future__ import annotations
@@ -50,8 +49,7 @@ import numpy as np
 
 from .. import simulation
 from ..assembly.system import BlockSystem
-from ..contact.solid_term import SolidContactModel, SolidContactStep
-from ..contact.term import ContactModel, ContactStep
+from ..contact.pipeline import ContactModel, ContactStep
 from ..model import Model
 from ..settings import RunSettings
 from ..step import Stepper
@@ -173,16 +171,14 @@ class Probe:
             return lambda fn: self.timed(phase, fn)
 
         self._wrap(Stepper, "step", counted_steps)
-        for model in (ContactModel, SolidContactModel):
-            self._wrap(model, "prepare", lambda fn: self.timed("detection", counted(fn)))
+        self._wrap(ContactModel, "prepare", lambda fn: self.timed("detection", counted(fn)))
         self._wrap(simulation, "get_solver", timed_solvers)
         for name in ("assemble", "base_system"):
             self._wrap(Stepper, name, timer("assembly"))
         for name in ("to_bsr", "to_csr", "to_dense", "saddle_csr", "saddle_dense"):
             self._wrap(BlockSystem, name, timer("assembly"))
-        for contacts in (ContactStep, SolidContactStep):
-            for name in ("converged", "commit"):
-                self._wrap(contacts, name, timer("open_close"))
+        for name in ("converged", "commit"):
+            self._wrap(ContactStep, name, timer("open_close"))
 
 
 class _TimedSolver:

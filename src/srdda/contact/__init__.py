@@ -1,8 +1,14 @@
-"""Contacts between blocks: detection, penalty springs, Mohr-Coulomb joints, open-close."""
-from .broadphase import block_boxes, candidate_pairs
-from .narrowphase import VERTEX_EDGE, VERTEX_VERTEX, detect_contacts
-from .openclose import LOCKED, OPEN, SLIDING, next_states
-from .term import ContactModel, ContactParameters, ContactSet, ContactTerm
+"""Contacts between blocks in 2D and 3D: one pipeline over a detector per dimension (docs/contacts.md).
 
-__all__ = ["block_boxes", "candidate_pairs", "detect_contacts", "VERTEX_EDGE", "VERTEX_VERTEX", "OPEN", "SLIDING",
-           "LOCKED", "next_states", "ContactModel", "ContactParameters", "ContactSet", "ContactTerm"]
+detector (:mod:`.detect2d`, :mod:`.detect3d`) → :class:`ContactRecord` →
+:class:`ContactSet` / :class:`ContactStep` / :class:`ContactTerm` (:mod:`.pipeline`)
+→ the joints' :class:`ContactLaw` (:class:`MohrCoulomb`).
+"""
+from .law import ContactLaw, ContactStiffness, JointResponse, MohrCoulomb
+from .openclose import LOCKED, OPEN, SLIDING, next_states
+from .pipeline import CONTACT_KINDS, ContactKind, ContactModel, ContactParameters, ContactSet, ContactStep, ContactTerm
+from .record import ContactRecord
+
+__all__ = ["ContactRecord", "ContactLaw", "ContactStiffness", "JointResponse", "MohrCoulomb", "OPEN", "SLIDING",
+           "LOCKED", "next_states", "ContactModel", "ContactParameters", "ContactSet", "ContactStep", "ContactTerm",
+           "ContactKind", "CONTACT_KINDS"]

@@ -17,10 +17,25 @@ results are the same bits with or without the kept list
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-__all__ = ["grow_boxes", "boxes_within", "KeptCandidates"]
+if TYPE_CHECKING:
+    from ..model import ModelArrays
+
+__all__ = ["block_boxes", "grow_boxes", "boxes_within", "KeptCandidates", "PairFinder", "pair_keys"]
+
+
+def block_boxes(vertices: np.ndarray, block_ptr: np.ndarray) -> np.ndarray:
+    """Boxes (nb, 2·dim) [lower corner, upper corner] of every block."""
+    starts = block_ptr[:-1]
+    return np.hstack([np.minimum.reduceat(vertices, starts, axis=0), np.maximum.reduceat(vertices, starts, axis=0)])
+
+
+def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:
+    """One integer per unordered block pair (k, 2): min·n + max."""
+    return np.min(pairs, axis=1) * n_blocks + np.max(pairs, axis=1) if len(pairs) else np.zeros(0, np.int64)
 
 
 def grow_boxes(boxes: np.ndarray, distance: float) -> np.ndarray:
@@ -57,3 +72,32 @@ class KeptCandidates:
             self._reference = vertices.copy()
             self.searches += 1
         return pairs[boxes_within(boxes, pairs, self.distance)]
+
+
+class PairFinder:
+    """The broad phase of a model's contacts: kept candidate pairs (above) less the hinged ones.
+
+    Blocks joined by a hinge turn about a shared point: their faces are not
+    joints, so their pairs never make contacts. ``can_touch`` marks the blocks
+    some other block may touch (the step control bounds only their vertices).
+    ``find(boxes, distance)`` is the dimension's broad phase.
+    """
+
+    def __init__(self, arrays: ModelArrays, distance: float,
+                 find: Callable[[np.ndarray, float, np.ndarray], np.ndarray]) -> None:
+        self.n_blocks, self.block_ptr = arrays.n_blocks, arrays.block_ptr
+        self.excluded = np.unique(pair_keys(arrays.links.hinged_block_pairs, arrays.n_blocks))
+        first, second = np.divmod(self.excluded, arrays.n_blocks)
+        partners_left_out = np.bincount(np.concatenate([first, second]), minlength=arrays.n_blocks)
+        self.can_touch = partners_left_out < arrays.n_blocks - 1
+        movable = ~arrays.block_fixed
+        # the broad phase with a margin of d0, run again once a vertex has moved d0/2
+        self.candidates = KeptCandidates(lambda boxes, d: find(boxes, d, movable), distance, distance)
+
+    def __call__(self, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The blocks' boxes and the candidate pairs (k, 2) of the configuration ``vertices``."""
+        boxes = block_boxes(vertices, self.block_ptr)
+        pairs = self.candidates(vertices, boxes)
+        if len(self.excluded):
+            pairs = pairs[~np.isin(pair_keys(pairs, self.n_blocks), self.excluded)]
+        return boxes, pairs

@@ -1,4 +1,4 @@
-"""The open-close rules: from a solved step, the state each contact should have had.
+"""The open-close rules: from a solved step, the state each contact should have had (2D and 3D).
 
 States: OPEN (no spring), SLIDING (normal spring + Coulomb friction force
 opposing the slip), LOCKED (normal and shear springs). Shi (1988), ch. 4:
@@ -13,6 +13,16 @@ opposing the slip), LOCKED (normal and shear springs). Shi (1988), ch. 4:
 * a SLIDING contact keeps its slip direction and locks only when its slip
   reverses (friction can stop a block, never push it back).
 
+The shear is a vector of the contact's frame (one component in 2D, two in
+3D) and the slip direction a unit vector of it (±1 in 2D). A contact whose
+shear spring is *dragged* (a 3D vertex-face contact, docs/contacts.md,
+"Sliding springs dragged at their strength") starts a step sliding with its
+spring held at its strength along the slip direction: it locks again once the
+spring holds (|k_s·s| within the strength), its reversal is measured by the
+step's slip s − s_0 (not from the dragged reference), and the direction it
+takes into the next step is that of the trial force ŝ·strength/k_s + slip (an
+elastic predictor and plastic corrector, Simo & Hughes 1998, ch. 2).
+
 Shi's tolerance f0·w0 (``tolerance``; f0 = 2e-7 in Shi's and ntdda's codes)
 keeps the iteration short on packed models: a closed contact opens only once
 its gap exceeds f0·w0 (plus T/k_n), a slip must reverse by more than f0·w0,
@@ -22,7 +32,7 @@ err by 1e-3: that force scales with the model, not the block). An open
 contact still closes at any penetration, so no spring starts compressed
 (docs/contacts.md, "Open-close convergence"). A contact still held closed in
 the band when the iteration ends is committed OPEN
-(:meth:`srdda.contact.term.ContactStep.commit`): its spring's energy is dropped.
+(:meth:`srdda.contact.pipeline.ContactStep.commit`): its spring's energy is dropped.
 The band's pull is not free of work: where a contact's gap shrank in the step
 (g₀ > g > 0), the pull k_n·g does the work k_n·g·(g₀ − g) on the blocks, which
 the ledger books as less ``dissipated_contact`` (measured in docs/contacts.md,
@@ -38,7 +48,7 @@ Two additions make impacts converge (docs/contacts.md):
 * the friction of a sliding contact uses the normal force of the previous
   solve (Shi); the step is iterated until that force has settled to
   ``friction_tolerance`` (relative) as well (for at most a few solves in
-  large systems, see :mod:`srdda.contact.term`).
+  large systems, see :mod:`srdda.contact.pipeline`).
 
 Negligible changes (``open_close_force_tolerance`` ε, :func:`negligible_force`):
 a contact that closes with a normal force below ε·F, or a locked one whose
@@ -52,17 +62,33 @@ import numpy as np
 from numba import njit
 
 __all__ = ["OPEN", "SLIDING", "LOCKED", "next_states", "negligible_force", "negligible_changes", "never_held",
-           "deepest_penetration"]
+           "deepest_penetration", "magnitudes"]
 
 OPEN, SLIDING, LOCKED = 0, 1, 2
 
 
-def next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.ndarray, kn: float, ks: float,
-                tan_phi: np.ndarray, cohesion_force: np.ndarray, tension_force: np.ndarray,
-                closed_this_step: np.ndarray, friction_normal: np.ndarray, friction_tolerance: float = 1e-3,
+def magnitudes(vectors: np.ndarray) -> np.ndarray:
+    """|v| (n,) of vectors (n, k): the absolute value when k = 1 (exactly, as 2D has always had it)."""
+    return np.abs(vectors[:, 0]) if vectors.shape[1] == 1 else np.linalg.norm(vectors, axis=1)
+
+
+def next_states(state: np.ndarray, direction: np.ndarray, gap: np.ndarray, shear: np.ndarray, slip: np.ndarray,
+                normal_stiffness: np.ndarray, shear_stiffness: np.ndarray, strength: np.ndarray,
+                friction: np.ndarray, tension: np.ndarray, closed_this_step: np.ndarray,
+                friction_normal: np.ndarray, dragged: np.ndarray, friction_tolerance: float = 1e-3,
                 tolerance: float = 0.0, settled_force: np.ndarray | float = 0.0
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """New (state, slip sign, changed, unsettled) of every contact for end-of-step gap and shear.
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """New (state, slip direction, trial direction, changed, unsettled) for end-of-solve gaps and shears.
+
+    ``shear`` (n, k): the shear springs' stretch from their references;
+    ``slip`` (n, k): the step's tangential motion s − s_0; ``direction``
+    (n, k): the slip direction of sliding contacts (zero: sliding without
+    friction); ``strength``: the shear strength at this solve's compression
+    (:class:`srdda.contact.law.JointResponse`), ``friction`` its slope in the
+    compression, ``tension`` what a closed contact carries before it opens;
+    ``dragged``: contacts whose sliding spring is dragged at its strength
+    (module doc). The *trial direction* is the one a dragged contact that
+    slides takes into the next step (its slip direction otherwise).
 
     ``unsettled``: sliding contacts whose friction used a normal force more
     than ``friction_tolerance`` (relative) away from the solved one, and whose
@@ -73,36 +99,60 @@ def next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.
     this step; ``friction_normal`` is the normal force the last solve used for
     the friction of sliding contacts.
     """
-    n = len(state)
-    new_state, new_sign = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int8)
+    n, k = shear.shape
+    new_state = np.empty(n, dtype=np.int8)
+    new_direction, trial = np.empty((n, k)), np.empty((n, k))
     changed, unsettled = np.empty(n, dtype=bool), np.empty(n, dtype=bool)
-    _next_states(state, sign, gap, shear, float(kn), float(ks), tan_phi, cohesion_force, tension_force,
-                 closed_this_step, friction_normal, float(friction_tolerance), float(tolerance),
-                 np.broadcast_to(np.asarray(settled_force, dtype=np.float64), (n,)), new_state, new_sign, changed,
-                 unsettled)
-    return new_state, new_sign, changed, unsettled
+    _next_states(state, np.ascontiguousarray(direction, dtype=np.float64), gap, np.ascontiguousarray(shear),
+                 np.ascontiguousarray(slip), normal_stiffness, shear_stiffness, strength, friction, tension,
+                 closed_this_step, friction_normal, dragged, float(friction_tolerance), float(tolerance),
+                 np.broadcast_to(np.asarray(settled_force, dtype=np.float64), (n,)), new_state, new_direction, trial,
+                 changed, unsettled)
+    return new_state, new_direction, trial, changed, unsettled
 
 
 @njit(cache=True)
-def _next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np.ndarray, kn: float, ks: float,
-                 tan_phi: np.ndarray, cohesion_force: np.ndarray, tension_force: np.ndarray,
-                 closed_this_step: np.ndarray, friction_normal: np.ndarray, friction_tolerance: float,
-                 tolerance: float, settled_force: np.ndarray, new_state: np.ndarray, new_sign: np.ndarray,
-                 changed: np.ndarray, unsettled: np.ndarray) -> None:
-    """:func:`next_states` contact by contact, into the four outputs (the gap and shear are finite: a solve
+def _size(v: np.ndarray) -> float:
+    """|v| of one shear vector: the absolute value of a single component (exactly)."""
+    if v.shape[0] == 1:
+        return abs(v[0])
+    acc = 0.0
+    for j in range(v.shape[0]):
+        acc += v[j] * v[j]
+    return np.sqrt(acc)
+
+
+@njit(cache=True)
+def _unit_into(v: np.ndarray, out: np.ndarray) -> None:
+    """out = v/|v| (zero for a zero vector); ±1 for a single component."""
+    size = _size(v)
+    for j in range(v.shape[0]):
+        out[j] = v[j] / size if size > 0.0 else 0.0
+
+
+@njit(cache=True)
+def _next_states(state: np.ndarray, direction: np.ndarray, gap: np.ndarray, shear: np.ndarray, slip: np.ndarray,
+                 kn: np.ndarray, ks: np.ndarray, strength: np.ndarray, friction: np.ndarray, tension: np.ndarray,
+                 closed_this_step: np.ndarray, friction_normal: np.ndarray, dragged: np.ndarray,
+                 friction_tolerance: float, tolerance: float, settled_force: np.ndarray, new_state: np.ndarray,
+                 new_direction: np.ndarray, trial: np.ndarray, changed: np.ndarray, unsettled: np.ndarray) -> None:
+    """:func:`next_states` contact by contact, into the five outputs (the gap and shear are finite: a solve
     that is not has already failed)."""
-    for c in range(len(state)):
-        normal = -kn * gap[c]
+    n, k = shear.shape
+    probe = np.empty(k)
+    for c in range(n):
+        normal = -kn[c] * gap[c]
         # a closed contact opens once its gap exceeds T/k_n + tolerance (Shi's f0·w0), an open one
         # closes at any penetration (so no spring starts compressed)
-        closed = normal >= -tension_force[c] - (kn * tolerance if state[c] != OPEN else 0.0)
+        closed = normal >= -tension[c] - (kn[c] * tolerance if state[c] != OPEN else 0.0)
         compression = normal if normal > 0.0 else 0.0
-        strength = compression * tan_phi[c] + cohesion_force[c]
-        slip = 1 if shear[c] > 0.0 else (-1 if shear[c] < 0.0 else 0)
         # a sliding contact locks only when its slip reverses by more than the tolerance (Shi), and keeps
-        # its slip direction while it slides
-        reversed_slip = state[c] == SLIDING and sign[c] * shear[c] < -tolerance and strength > 0.0
-        holds = ks * abs(shear[c]) <= strength and state[c] != SLIDING
+        # its slip direction while it slides; a dragged spring measures the reversal by the step's slip
+        along = 0.0
+        for j in range(k):
+            along += direction[c, j] * (slip[c, j] if dragged[c] else shear[c, j])
+        reversed_slip = state[c] == SLIDING and along < -tolerance and strength[c] > 0.0
+        holds = ks[c] * _size(shear[c]) <= strength[c] and (state[c] != SLIDING or dragged[c])
         if not closed:
             after = OPEN
         elif holds or reversed_slip or state[c] == OPEN:  # a contact that closes locks first
@@ -111,13 +161,31 @@ def _next_states(state: np.ndarray, sign: np.ndarray, gap: np.ndarray, shear: np
             after = SLIDING
         if state[c] == LOCKED and not closed and closed_this_step[c]:  # glancing
             after = SLIDING
-        after_sign = (sign[c] if state[c] == SLIDING else slip) if after == SLIDING else 0
-        friction = tan_phi[c] > 0.0
-        new_state[c], new_sign[c] = after, after_sign
-        changed[c] = after != state[c] or (after == SLIDING and after_sign != sign[c] and friction)
+        new_state[c] = after
+        moved = False
+        if after == SLIDING and state[c] == SLIDING:
+            new_direction[c] = direction[c]
+            if dragged[c]:  # the trial force of a spring held at its strength
+                limit = strength[c] / ks[c]
+                for j in range(k):
+                    probe[j] = direction[c, j] * limit + slip[c, j]
+                _unit_into(probe, trial[c])
+            else:
+                trial[c] = direction[c]
+        elif after == SLIDING:  # it starts to slide along the load its spring carried
+            _unit_into(shear[c], new_direction[c])
+            trial[c] = new_direction[c]
+        else:
+            new_direction[c] = 0.0
+            trial[c] = 0.0
+        if after == SLIDING:
+            for j in range(k):
+                moved = moved or new_direction[c, j] != direction[c, j]
+        acts = friction[c] > 0.0
+        changed[c] = after != state[c] or (moved and acts)
         off = abs(compression - friction_normal[c])
-        unsettled[c] = after == SLIDING and state[c] == SLIDING and friction and (
-            off > friction_tolerance * compression) and off * tan_phi[c] > settled_force[c]
+        unsettled[c] = after == SLIDING and state[c] == SLIDING and acts and (
+            off > friction_tolerance * compression) and off * friction[c] > settled_force[c]
 
 
 def negligible_force(block_mass: np.ndarray, gravity: np.ndarray, block_a: np.ndarray, block_b: np.ndarray,

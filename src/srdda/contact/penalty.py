@@ -56,12 +56,13 @@ class ContactSprings:
 
     ``normal_a``, ``normal_b`` (n, ndof): the rows n·T of the two sides;
     ``shear_a``, ``shear_b`` (n, k, ndof): the k shear rows; ``gap`` (n,) and
-    ``shear0`` (n, k): the start-of-step gap and shear spring displacement.
+    ``shear0`` (n, k): the start-of-step gap and shear spring displacement;
+    ``normal_stiffness``, ``shear_stiffness`` (n,): k_n and k_s of each contact.
     """
 
     def __init__(self, block_a: np.ndarray, block_b: np.ndarray, normal_a: np.ndarray, normal_b: np.ndarray,
                  shear_a: np.ndarray, shear_b: np.ndarray, gap: np.ndarray, shear0: np.ndarray,
-                 normal_stiffness: float, shear_stiffness: float) -> None:
+                 normal_stiffness: np.ndarray, shear_stiffness: np.ndarray) -> None:
         self.block_a, self.block_b = block_a, block_b
         self.normal_a, self.normal_b, self.shear_a, self.shear_b = normal_a, normal_b, shear_a, shear_b
         self.gap, self.shear0 = gap, shear0
@@ -85,8 +86,8 @@ class ContactSprings:
         Each row is scaled by the square root of its stiffness, so the pairs'
         own stiffness is 1.
         """
-        rn = self.root_normal * (state[index] != OPEN)
-        rs = self.root_shear * (state[index] == LOCKED)
+        rn = self.root_normal[index] * (state[index] != OPEN)
+        rs = self.root_shear[index] * (state[index] == LOCKED)
         (_, k, ndof), n = self.shear_a.shape, len(index)
         rows_a, rows_b, gap = np.empty((n, 1 + k, ndof)), np.empty((n, 1 + k, ndof)), np.empty((n, 1 + k, 1))
         _stacked_rows(index, self.normal_a, self.shear_a, rn, rs, rows_a)
@@ -103,8 +104,9 @@ class ContactSprings:
         else:
             root, rows_a, rows_b, gap = self.root_normal, self.normal_a[:, None], self.normal_b[:, None], \
                 self.gap[:, None]
-        return PenaltyPairs(self.block_a[index], root * rows_a[index], self.block_b[index], root * rows_b[index],
-                            root * gap[index], stiffness)
+        r = root[index]
+        return PenaltyPairs(self.block_a[index], r[:, None, None] * rows_a[index], self.block_b[index],
+                            r[:, None, None] * rows_b[index], r[:, None] * gap[index], stiffness)
 
     def add_to(self, system: BlockSystem, state: np.ndarray, c_p: float, by_changes: bool) -> None:
         """Add the springs of ``state`` to ``system`` (matrix weight c_p, module doc): by changes to the last

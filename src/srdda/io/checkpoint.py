@@ -43,10 +43,15 @@ def _class_path(obj: Any) -> str:
 
 
 def _import(path: str) -> type:
+    """The class ``module:Name`` a checkpoint names; a ValueError when this srdda has none (an older file)."""
     module, _, name = path.partition(":")
-    obj: Any = importlib.import_module(module)
-    for part in name.split("."):
-        obj = getattr(obj, part)
+    try:
+        obj: Any = importlib.import_module(module)
+        for part in name.split("."):
+            obj = getattr(obj, part)
+    except (ImportError, AttributeError):
+        raise ValueError(f"the checkpoint holds a {path} that this srdda does not have (written by an older "
+                         "version: its contacts were stored in another form); run the model again") from None
     return obj
 
 
@@ -154,6 +159,10 @@ def read_checkpoint(group: h5py.Group, index: int, moments: Any) -> Any:
                 continue
             sub = _import(str(group[present].attrs["class"]))
             j = int(np.sum(group[present][:index]))  # its rows are those of the present values only
+            missing = [g.name for g in dataclasses.fields(sub) if f"{f.name}.{g.name}__count" not in group]
+            if missing:
+                raise ValueError(f"the checkpoint's {f.name} lacks {', '.join(missing)} (written by another srdda "
+                                 "version); run the model again")
             kwargs[f.name] = sub(**{g.name: _read_value(group, f"{f.name}.{g.name}", j)
                                     for g in dataclasses.fields(sub)})
         elif f"{f.name}__count" in group:

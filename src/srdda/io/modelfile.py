@@ -101,7 +101,8 @@ def _build(spec: ModelFile, source: str, base_dir: Path) -> tuple[Model, RunSett
     for name, m in spec.materials.items():
         model.add_material(name, Material(m.density, m.young, m.poisson, m.plane))
     for name, j in spec.joint_materials.items():
-        model.add_joint_material(name, JointMaterial(j.friction_angle, j.cohesion, j.tensile_strength), j.between)
+        model.add_joint_material(name, JointMaterial(j.friction_angle, j.cohesion, j.tensile_strength,
+                                                     j.normal_stiffness, j.shear_stiffness), j.between)
     names: dict[str, int] = {}
     for i, b in enumerate(spec.blocks):
         label = b.name or f"block {i}"
@@ -381,6 +382,7 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
     if model.joint_materials:
         out["joint_materials"] = {
             n: {"friction_angle": j.friction_angle, "cohesion": j.cohesion, "tensile_strength": j.tensile_strength,
+                **{k: getattr(j, k) for k in ("normal_stiffness", "shear_stiffness") if getattr(j, k) is not None},
                 "between": [list(k) for k, v in model.joint_map.items() if v == n]}
             for n, j in model.joint_materials.items()}
     blocks = []

@@ -21,7 +21,7 @@ import numpy as np
 from ..constraints.data import links_from_flat
 from ..geometry.polyhedron import PolyhedronMesh
 from ..ledger import ENERGY_NAMES
-from ..model import Load, ModelArrays
+from ..model import JointTable, Load, ModelArrays
 from ..settings import RunSettings
 from ..state import State
 from .checkpoint import checkpoint_count, increasing_prefix, read_checkpoint
@@ -71,6 +71,12 @@ def model_arrays_from_file(path: str | Path) -> ModelArrays:
             elif f_.name == "mesh":
                 fields = {k[5:]: g[k][()] for k in g if k.startswith("mesh.")}
                 kwargs["mesh"] = PolyhedronMesh(**fields) if fields else None
+            elif f_.name == "joints" and "joints.friction_angle" in g:
+                kwargs["joints"] = JointTable(**{k[7:]: g[k][()] for k in g if k.startswith("joints.")})
+            elif f_.name == "joints" and "joint_properties" in g:  # files of srdda 0.1.0: (nj, 3) columns
+                table = g["joint_properties"][()]
+                nan = np.full(len(table), np.nan)
+                kwargs["joints"] = JointTable(table[:, 0], table[:, 1], table[:, 2], nan, nan.copy())
             elif f_.name in g:
                 kwargs[f_.name] = g[f_.name][()]
             elif f_.default is None:  # an optional array (face_joint: 3D faces naming joint materials)
@@ -189,4 +195,7 @@ def load_checkpoint(path: str | Path, arrays: ModelArrays) -> State:
         n = checkpoint_count(cp)
         if n == 0:
             raise ResultsFileError(f"{path}: no checkpoint was flushed; nothing to resume from")
-        return read_checkpoint(cp, n - 1, moments)
+        try:
+            return read_checkpoint(cp, n - 1, moments)
+        except ValueError as exc:
+            raise ResultsFileError(f"{path}: {exc}") from None

@@ -91,31 +91,17 @@ The store appends them at the recorded steps that are multiples of ``contact_eve
 def contacts_from_state(arrays: ModelArrays, state: State) -> dict[str, np.ndarray] | None:
     """The default contact output: the contact set a step leaves on ``state.contacts`` (None: no record).
 
-    Gives ``point`` (the contact vertex), ``point_b`` (its foot on the
-    contacted edge), ``normal`` (the edge's outward unit normal) and every
-    per-contact array of the set (``state``, ``normal_force``, ``gap``, ...).
+    Every per-contact array of the set, in 2D and 3D alike: ``point`` (the
+    contact point x_a at the start of the step), ``point_b`` (its foot on the
+    other block), ``normal``, ``state``, ``normal_force``, ``gap``, ``shear``,
+    ``direction``, ``block_a``, ``block_b``, ... (:class:`srdda.contact.ContactSet`).
     """
     c = getattr(state, "contacts", None)
-    if c is None or not (hasattr(c, "vertex") or hasattr(c, "point")):
+    if c is None:
         return None
-    if not hasattr(c, "vertex"):  # a set that carries its own points and normals (3D contacts)
-        return {f.name: getattr(c, f.name) for f in dataclasses.fields(c)
-                if isinstance(getattr(c, f.name), np.ndarray) and len(getattr(c, f.name)) == len(c.point)}
-    vertex = np.asarray(c.vertex, dtype=np.int64)
-    out: dict[str, np.ndarray] = {"point": state.vertices[vertex]}
-    if hasattr(c, "edge"):
-        a = state.vertices[np.asarray(c.edge, dtype=np.int64)]
-        b = state.vertices[arrays.next_vertex[np.asarray(c.edge, dtype=np.int64)]]
-        d = b - a
-        length2 = np.maximum(np.einsum("ij,ij->i", d, d), 1e-300)
-        s = np.clip(np.einsum("ij,ij->i", out["point"] - a, d) / length2, 0.0, 1.0)
-        out["point_b"] = a + s[:, None] * d
-        out["normal"] = np.column_stack([d[:, 1], -d[:, 0]]) / np.sqrt(length2)[:, None]  # CCW: outward
-    for f in dataclasses.fields(c):
-        value = getattr(c, f.name)
-        if isinstance(value, np.ndarray) and value.shape[:1] == vertex.shape and f.name not in out:
-            out[f.name] = value
-    return out
+    n = len(c.key)
+    return {f.name: getattr(c, f.name) for f in dataclasses.fields(c)
+            if isinstance(getattr(c, f.name), np.ndarray) and len(getattr(c, f.name)) == n}
 
 
 class ResultsWriteError(OSError):
@@ -292,9 +278,11 @@ def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None)
         value = getattr(arrays, f.name)
         if isinstance(value, np.ndarray):
             group.create_dataset(f.name, data=value)
-    if arrays.mesh is not None:  # the faces of 3D blocks
-        for f in dataclasses.fields(arrays.mesh):
-            group.create_dataset(f"mesh.{f.name}", data=getattr(arrays.mesh, f.name))
+    for part in ("mesh", "joints"):  # the faces of 3D blocks (None in 2D); the joint table
+        record = getattr(arrays, part)
+        if record is not None:
+            for f in dataclasses.fields(record):
+                group.create_dataset(f"{part}.{f.name}", data=getattr(record, f.name))
     links, links_meta = links_to_flat(arrays.links)  # hinges, springs, driven points (srdda.constraints)
     for name, value in links.items():
         group.create_dataset(f"links.{name}", data=value)

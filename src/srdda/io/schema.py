@@ -26,6 +26,7 @@ def _unit(kind: str) -> BeforeValidator:
 
 Pressure = Annotated[float, _unit("pressure")]
 Stiffness = Annotated[float, _unit("stiffness")]
+JointStiffness = Annotated[float, _unit("joint stiffness")]
 Density = Annotated[float, _unit("density")]
 Time = Annotated[float, _unit("time")]
 Angle = Annotated[float, _unit("angle")]
@@ -57,6 +58,8 @@ class JointMaterialSection(_Strict):
     friction_angle: Angle = Field(0.0, ge=0, lt=90)
     cohesion: Pressure = Field(0.0, ge=0)
     tensile_strength: Pressure = Field(0.0, ge=0)
+    normal_stiffness: JointStiffness | None = Field(None, gt=0)  # Pa/m; None: the run's contact penalty
+    shear_stiffness: JointStiffness | None = Field(None, gt=0)  # Pa/m; None: shear_ratio × the normal one
     between: list[tuple[str, str]] = []
 
 

@@ -25,14 +25,9 @@ import numpy as np
 from numba import njit
 
 from .candidates import grow_boxes
+from .growable import room_for_row
 
-__all__ = ["block_boxes_3d", "candidate_pairs_3d"]
-
-
-def block_boxes_3d(vertices: np.ndarray, block_ptr: np.ndarray) -> np.ndarray:
-    """(nb, 6) boxes [xmin, ymin, zmin, xmax, ymax, zmax] of every block."""
-    starts = block_ptr[:-1]
-    return np.hstack([np.minimum.reduceat(vertices, starts, axis=0), np.maximum.reduceat(vertices, starts, axis=0)])
+__all__ = ["candidate_pairs_3d"]
 
 
 @njit(cache=True)
@@ -45,10 +40,7 @@ def _overlap(boxes, i, j):
 
 @njit(cache=True)
 def _push(buf, n, i, j):
-    if n == len(buf):
-        bigger = np.empty((2 * len(buf), 2), dtype=np.int64)
-        bigger[:n] = buf[:n]
-        buf = bigger
+    buf = room_for_row(buf, n)
     buf[n, 0] = min(i, j)
     buf[n, 1] = max(i, j)
     return buf

@@ -54,14 +54,16 @@ Criteria (d0 the contact distance, all on the configuration at t):
 
 Output rows [kind, feature of a, feature of b, block a, block b]: kind 0 V-F
 (vertex, face), kind 1 E-E (edge of a, edge of b), edges numbered as in
-:class:`srdda.contact.solid_term.PolyhedronTopology`.
+:class:`srdda.contact.detect3d.PolyhedronTopology`.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-__all__ = ["VERTEX_FACE", "EDGE_EDGE", "FOUND_FIELDS", "detect_polyhedra_contacts"]
+from .growable import room_for_row
+
+__all__ = ["VERTEX_FACE", "EDGE_EDGE", "FOUND_FIELDS", "narrow_phase_3d"]
 
 VERTEX_FACE = 0
 EDGE_EDGE = 1
@@ -140,10 +142,7 @@ def _height_over(block_face_ptr, face_normal, face_point, b, x, y, z):
 
 @njit(cache=True)
 def _push(buf, n, kind, fa, fb, a, b):
-    if n == len(buf):
-        bigger = np.empty((2 * len(buf), 5), dtype=np.int64)
-        bigger[:n] = buf[:n]
-        buf = bigger
+    buf = room_for_row(buf, n)
     buf[n, 0] = kind
     buf[n, 1] = fa
     buf[n, 2] = fb
@@ -287,7 +286,7 @@ def _edge_edge(X, a, b, block_edge_ptr, edge_v0, edge_v1, edge_faces, edge_conve
 
 
 @njit(cache=True)
-def detect_polyhedra_contacts(X, pairs, boxes, block_ptr, block_face_ptr, face_ptr, face_vertex, face_normal,
+def narrow_phase_3d(X, pairs, boxes, block_ptr, block_face_ptr, face_ptr, face_vertex, face_normal,
                               face_point, neighbour_ptr, neighbour, vertex_convex, block_edge_ptr, edge_v0, edge_v1,
                               edge_faces, edge_convex, d0, sin_tol, max_depth):
     """Contacts (k, 5) [kind, feature a, feature b, block a, block b] of the candidate ``pairs`` (k, 2).

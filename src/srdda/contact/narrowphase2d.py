@@ -1,4 +1,4 @@
-"""Narrow phase: vertex-to-edge and vertex-to-vertex contacts of candidate block pairs.
+"""Narrow phase in 2D: vertex-to-edge and vertex-to-vertex contacts of candidate block pairs.
 
 For every candidate pair (a, b), both ways round, each vertex v of a is tested
 against each edge of b (numba kernel, no Python loop). Blocks are stored
@@ -35,8 +35,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["detect_contacts", "VERTEX_EDGE", "VERTEX_VERTEX", "FOUND_VERTEX", "FOUND_EDGE", "FOUND_KIND",
-           "FOUND_FIELDS"]
+from .growable import room_for_row
+
+__all__ = ["VERTEX_EDGE", "VERTEX_VERTEX", "FOUND_VERTEX", "FOUND_EDGE", "FOUND_KIND", "FOUND_FIELDS",
+           "narrow_phase_2d"]
 
 VERTEX_EDGE = 0
 VERTEX_VERTEX = 1
@@ -179,10 +181,7 @@ def _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
 
 @njit(cache=True)
 def _push(buf, n, v, e, kind):
-    if n == len(buf):
-        bigger = np.empty((2 * len(buf), 3), dtype=np.int64)
-        bigger[:n] = buf[:n]
-        buf = bigger
+    buf = room_for_row(buf, n)
     buf[n, 0] = v
     buf[n, 1] = e
     buf[n, 2] = kind
@@ -190,7 +189,7 @@ def _push(buf, n, v, e, kind):
 
 
 @njit(cache=True)
-def detect_contacts(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_tol, max_depth):
+def narrow_phase_2d(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_tol, max_depth):
     """Contacts (k, 3) [vertex, edge start, kind] of the candidate ``pairs`` (k, 2).
 
     A vertex behind the edge's line counts only if it lies inside the other

@@ -1,4 +1,4 @@
-"""Broad phase: candidate block pairs whose boxes, grown by the contact distance, overlap.
+"""Broad phase in 2D: candidate block pairs whose boxes, grown by the contact distance, overlap.
 
 A shapely 2 ``STRtree`` (a packed R-tree in GEOS) holds the blocks' axis-aligned
 bounding boxes; one bulk ``query`` (envelope overlap, which is exact for
@@ -12,18 +12,10 @@ import shapely
 
 from .candidates import grow_boxes
 
-__all__ = ["block_boxes", "candidate_pairs"]
+__all__ = ["candidate_pairs_2d"]
 
 
-def block_boxes(vertices: np.ndarray, block_ptr: np.ndarray) -> np.ndarray:
-    """(nb, 4) boxes [xmin, ymin, xmax, ymax] of every block."""
-    starts = block_ptr[:-1]
-    lo = np.minimum.reduceat(vertices, starts, axis=0)
-    hi = np.maximum.reduceat(vertices, starts, axis=0)
-    return np.hstack([lo, hi])
-
-
-def candidate_pairs(boxes: np.ndarray, margin: float, movable: np.ndarray | None = None) -> np.ndarray:
+def candidate_pairs_2d(boxes: np.ndarray, margin: float, movable: np.ndarray | None = None) -> np.ndarray:
     """Pairs (k, 2) of blocks a < b whose boxes grown by ``margin`` overlap, sorted.
 
     Pairs of two blocks that cannot move (``movable`` False for both) are left out:
