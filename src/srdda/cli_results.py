@@ -158,16 +158,21 @@ def animate_command(run: str, out: str, fps: int, frames: int, color: str) -> No
 @click.command("vtk")
 @click.argument("run", type=RUN)
 @click.option("-o", "--out", type=click.Path(file_okay=False), required=True, help="Output folder.")
-@click.option("--every", type=click.IntRange(min=1), default=1, show_default=True,
-              help="Write every N-th recorded step (and the last).")
-def vtk_command(run: str, out: str, every: int) -> None:
-    """Write ParaView files (VTU per step, PVD series) of a results file RUN."""
-    from .io.vtk import write_vtu_series
+@click.option("--every", type=click.IntRange(min=1), default=None,
+              help="Write every N-th recorded step (and the last); default: the smallest N that keeps each series "
+                   "at or under 200 files.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def vtk_command(run: str, out: str, every: int | None, quiet: bool) -> None:
+    """Write ParaView files (VTU per step, PVD series) of a results file RUN: blocks, contacts, bolts."""
+    from .io.vtk import default_every, series_rows, write_vtu_series
 
     res = _read(run)
     _writable(Path(out), folder=True)
+    every = default_every(len(res.step)) if every is None else every
     try:
-        pvds = write_vtu_series(res, out, every=every)
+        with tqdm(total=len(series_rows(len(res.step), every)), unit="step", desc="vtk",
+                  disable=True if quiet else None) as bar:
+            pvds = write_vtu_series(res, out, every=every, progress=lambda: bar.update(1))
     except OSError as exc:
         raise click.ClickException(f"cannot write in {out} ({exc.strerror})") from None
     for path in pvds.values():
