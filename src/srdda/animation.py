@@ -46,11 +46,12 @@ def _frames(n_rows: int, max_frames: int) -> np.ndarray:
 
 
 def animate(results: StoredResult | str | Path, out: str | Path, fps: int = 20, max_frames: int = 200,
-            color: str | None = "speed", dpi: int = 80) -> Path:
+            color: str | None = "speed", dpi: int = 80, progress: Callable[[int, int], None] | None = None) -> Path:
     """Write an animation of the blocks and the measured points' paths; returns the file written.
 
     The suffix of ``out`` picks the format (``.gif`` or ``.mp4``); at most
     ``max_frames`` recorded steps are shown, evenly spread over the run.
+    ``progress(frame, n_frames)`` is called after each frame is drawn.
     """
     res = results if isinstance(results, StoredResult) else read_results(results)
     out = Path(out)
@@ -64,11 +65,12 @@ def animate(results: StoredResult | str | Path, out: str | Path, fps: int = 20, 
         warnings.warn(f"no ffmpeg found (install srdda[mp4] or put ffmpeg on PATH); writing {out.name} instead",
                       stacklevel=2)
     with matplotlib.rc_context({"animation.ffmpeg_path": exe} if exe else {}):
-        _write_animation(res, out, fps, max_frames, color, dpi)
+        _write_animation(res, out, fps, max_frames, color, dpi, progress)
     return out
 
 
-def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, color: str | None, dpi: int) -> None:
+def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, color: str | None, dpi: int,
+                     progress: Callable[[int, int], None] | None = None) -> None:
     """Draw and save the frames with the writer the suffix of ``out`` picks."""
     writer = animation.FFMpegWriter(fps=fps) if out.suffix.lower() == ".mp4" else animation.PillowWriter(fps=fps)
 
@@ -76,7 +78,7 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
     mp = history(res, "measured_position")
     frames = _frames(len(history(res, "step")), max_frames)
     if res.mesh is not None:
-        _write_solid_animation(res, out, writer, frames, color, dpi)
+        _write_solid_animation(res, out, writer, frames, color, dpi, progress)
         return
     fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
     values = block_values(res, 0, color)
@@ -102,11 +104,11 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
         ax.set_title(step_title(res, i))
         return [coll, *trails]
 
-    _save(fig, draw, frames, out, writer, dpi)
+    _save(fig, draw, frames, out, writer, dpi, progress)
 
 
 def _write_solid_animation(res: StoredResult, out: Path, writer: animation.AbstractMovieWriter, frames: np.ndarray,
-                           color: str | None, dpi: int) -> None:
+                           color: str | None, dpi: int, progress: Callable[[int, int], None] | None = None) -> None:
     """The 3D blocks' faces and the measured points' paths, frame by frame."""
     verts = history(res, "vertices")
     mp = history(res, "measured_position")
@@ -131,13 +133,13 @@ def _write_solid_animation(res: StoredResult, out: Path, writer: animation.Abstr
         ax.set_title(step_title(res, i))
         return [coll, *trails]
 
-    _save(fig, draw, frames, out, writer, dpi)
+    _save(fig, draw, frames, out, writer, dpi, progress)
 
 
 def _save(fig: plt.Figure, draw: Callable[[int], list], frames: np.ndarray, out: Path,
-          writer: animation.AbstractMovieWriter, dpi: int) -> None:
-    """Draw every frame with ``draw`` and write the animation."""
+          writer: animation.AbstractMovieWriter, dpi: int, progress: Callable[[int, int], None] | None = None) -> None:
+    """Draw every frame with ``draw`` and write the animation (``progress(frame, n_frames)`` after each)."""
     anim = animation.FuncAnimation(fig, draw, frames=[int(i) for i in frames], blit=False)
     out.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(out, writer=writer, dpi=dpi)
+    anim.save(out, writer=writer, dpi=dpi, progress_callback=progress)
     plt.close(fig)

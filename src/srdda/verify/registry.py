@@ -24,7 +24,8 @@ from typing import Any
 
 from ..integrators.methods import METHODS
 
-__all__ = ["Case", "CASES", "Row", "case", "row", "run_case", "UnknownCaseError"]
+__all__ = ["Case", "CASES", "Row", "case", "row", "run_case", "UnknownCaseError", "expected_seconds",
+           "EXPECTED_SECONDS"]
 
 Row = dict[str, Any]
 CaseFunction = Callable[[tuple[str, ...], bool], list[Row]]
@@ -95,3 +96,17 @@ def run_case(name: str, quick: bool = False, methods: Sequence[str] | None = Non
     c = get_case(name)
     chosen = c.methods if methods is None else tuple(m for m in c.methods if m in methods)
     return c.run(chosen, quick and c.quick)
+
+
+# Wall seconds of each case on the reference machine (2 shared cores, DATE), (with --quick, without):
+# the estimate that `srdda verify`'s progress bar scales by this machine's speed. A case missing here
+# (a new one) counts as the median of the others.
+EXPECTED_SECONDS: dict[str, tuple[float, float]] = {}
+
+
+def expected_seconds(name: str, quick: bool) -> float:
+    """The wall seconds the case ``name`` took on the reference machine (:data:`EXPECTED_SECONDS`)."""
+    if name in EXPECTED_SECONDS:
+        return EXPECTED_SECONDS[name][0 if quick else 1]
+    known = sorted(t[0 if quick else 1] for t in EXPECTED_SECONDS.values())
+    return known[len(known) // 2] if known else 1.0
