@@ -211,6 +211,36 @@ def check_command(model: str) -> None:
                f"{settings.method}, {length} of {settings.dt} s")
 
 
+@main.command("show")
+@click.argument("model", type=click.Path(exists=True, dir_okay=False))
+@click.option("-o", "--out", type=click.Path(dir_okay=False), default=None,
+              help="Image file (png, pdf, svg; default: MODEL's name + .png in the current directory).")
+def show_command(model: str, out: str | None) -> None:
+    """Draw a model file before running it: blocks by material, joints, fixed points, bolts, measured points."""
+    from .modelview import fig_model_setup
+
+    mdl, settings = _load(model)
+    _compile(mdl, settings, model)
+    path = Path(out) if out else Path(f"{Path(model).stem}.png")
+    fig = fig_model_setup(mdl, read_title(model))
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=120)
+    except OSError as exc:
+        raise click.ClickException(f"cannot write {path} ({exc.strerror})") from None
+    click.echo(f"wrote {path}")
+
+
+def read_title(model: str) -> str:
+    """The model file's ``title`` (else its file name) for a picture's title."""
+    import tomllib
+
+    try:
+        return str(tomllib.loads(read_model_text(model)).get("title") or Path(model).name)
+    except (tomllib.TOMLDecodeError, OSError):
+        return Path(model).name
+
+
 @main.command("info")
 def info_command() -> None:
     """Versions and the linear solvers available here."""

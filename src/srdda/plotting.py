@@ -416,19 +416,40 @@ def solid_limits(ax: Any, points: np.ndarray) -> None:
 
 
 def fig_solid_model(res: Results, index: int = -1, color: str | None = "speed", trails: bool = True) -> Figure:
-    """3D blocks at recorded step ``index`` (their faces), with the measured points' paths so far."""
+    """3D blocks at recorded step ``index`` (their faces), with the measured points' paths so far.
+
+    Rendered with pyvista off-screen (:mod:`srdda.render3d`), else with matplotlib's 3D axes.
+    """
+    from matplotlib import cm, colors as mcolors
+
+    from .render3d import pyvista_renders, render_blocks
+
     verts = res.array("vertices")
     index = index % len(verts)
-    fig = plt.figure(figsize=(7, 6), layout="constrained")
-    ax = fig.add_subplot(projection="3d")
     values = block_values(res, index, color)
-    coll = plot_solid_blocks(ax, verts[index], res.mesh, values)
-    if values is not None:
-        fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.6)
-    if trails:
-        _trails(ax, res, index)
-    solid_limits(ax, verts.reshape(-1, verts.shape[-1]))
+    if not pyvista_renders():
+        fig = plt.figure(figsize=(7, 6), layout="constrained")
+        ax = fig.add_subplot(projection="3d")
+        coll = plot_solid_blocks(ax, verts[index], res.mesh, values)
+        if values is not None:
+            fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.6)
+        if trails:
+            _trails(ax, res, index)
+        solid_limits(ax, verts.reshape(-1, verts.shape[-1]))
+        ax.set_title(step_title(res, index))
+        return fig
+    mp = history(res, "measured_position")[: index + 1]
+    paths = [(np.stack([mp[:-1, k], mp[1:, k]], axis=1), f"C{k % 10}", 3.0) for k in range(mp.shape[1])] if trails \
+        else []
+    clim = None if values is None else (float(np.min(values)), float(np.max(values)) or 1.0)
+    image = render_blocks(verts[index], res.mesh, values, clim=clim, segments=paths)
+    fig, ax = plt.subplots(figsize=(7, 6), layout="constrained")
+    ax.imshow(image)
+    ax.set_axis_off()
     ax.set_title(step_title(res, index))
+    if values is not None:
+        mappable = cm.ScalarMappable(mcolors.Normalize(*clim), "viridis")
+        fig.colorbar(mappable, ax=ax, label=quantity_label(res, color), shrink=0.6)
     return fig
 
 
