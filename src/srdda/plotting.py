@@ -41,7 +41,8 @@ __all__ = ["history", "quantity_names", "block_values", "method_label", "plot_bl
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
            "fig_trajectories", "fig_time_series", "plot_bolts", "fig_bolt_forces",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index",
-           "quantity_unit", "quantity_label", "quantity_words", "fig_energy_ledger", "ledger_series", "LEDGER_PANELS",
+           "quantity_unit", "quantity_label", "quantity_words", "fig_energy_ledger", "ledger_series", "ledger_panels",
+           "LEDGER_PANELS",
            "block_energies", "fig_block_energies", "ENERGY_WORDS"]
 
 Results = Any  # Result or StoredResult: both have .array(name), .block_names, .method
@@ -675,6 +676,15 @@ def ledger_series(res: Results) -> dict[str, np.ndarray]:
     return out
 
 
+def ledger_panels(series: Sequence[Mapping[str, np.ndarray]] | Any) -> list[tuple[str, str]]:
+    """The (key, title) of :data:`LEDGER_PANELS` that :func:`fig_energy_ledger` draws for these
+    :func:`ledger_series`: the entries that are not zero in some run (relative to the largest), and the error."""
+    series = list(series)
+    largest = max(float(np.max(np.abs(v), initial=0.0)) for s in series for v in s.values())
+    return [(k, t) for k, t in LEDGER_PANELS
+            if k == "error" or any(np.max(np.abs(s[k]), initial=0.0) > 1e-9 * largest for s in series)]
+
+
 def _si_prefix(largest: float) -> tuple[float, str]:
     """The power of 1000 and its SI prefix that bring ``largest`` into [1, 1000) (n ... G)."""
     exponent = 0 if largest <= 0 else int(np.clip(3 * np.floor(np.log10(largest) / 3), -9, 9))
@@ -691,9 +701,7 @@ def fig_energy_ledger(results: Results | Mapping[str, Results], title: str = "")
     """
     runs = results if isinstance(results, Mapping) else {results.method: results}
     series = {m: ledger_series(r) for m, r in runs.items()}
-    largest = max(float(np.max(np.abs(v), initial=0.0)) for s in series.values() for v in s.values())
-    keep = [(k, t) for k, t in LEDGER_PANELS
-            if k == "error" or any(np.max(np.abs(s[k]), initial=0.0) > 1e-9 * largest for s in series.values())]
+    keep = ledger_panels(series.values())
     ncols = min(3, len(keep))
     nrows = -(-len(keep) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(4.3 * ncols, 2.7 * nrows + 0.6), layout="constrained",
