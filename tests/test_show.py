@@ -58,7 +58,7 @@ def test_without_pyvista_3d_models_are_drawn_with_matplotlib(tmp_path: Path, mon
     (ax,) = fig.axes
     faces = [c for c in ax.collections if isinstance(c, Poly3DCollection)]
     assert len(faces) == 1 and len(faces[0].get_facecolor()) == 12  # two boxes, six faces each, by material
-    assert {"material: rock", "fixed block"} <= set(_labels(fig))
+    assert {"material: rock", "fixed block (see-through)"} <= set(_labels(fig))
 
 
 def test_show_refuses_a_bad_model_with_exit_2(tmp_path: Path) -> None:

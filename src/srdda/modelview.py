@@ -105,7 +105,9 @@ def _fig_solid_setup(model: Model, arrays: ModelArrays, colors: list, joints: di
                         pts[np.concatenate([arrays.spring_rows_b, links.spring_rows_b]).astype(np.int64)]], axis=1)
     lines = [(bolt_ends, "tab:red", 4.0, "bolt"), (springs, "tab:green", 3.0, "spring"),
              *((segs, joint_colors[r], 4.0, f"joint: {joint_names[r]}") for r, segs in joints.items())]
-    handles = _legend(model, arrays, colors)
+    handles = [h for h in _legend(model, arrays, colors) if h.get_label() != "fixed block"]
+    if np.any(arrays.block_fixed):
+        handles.append(Patch(facecolor="0.9", edgecolor="0.6", label="fixed block (see-through)"))
     handles += [Line2D([], [], ls="none", marker=m, color=c, label=label) for p, c, _, label, m in symbols if len(p)]
     handles += [Line2D([], [], color=c, lw=2.5, label=label) for segs, c, _, label in lines if len(segs)]
     fig = plt.figure(figsize=(8, 7), layout="constrained")
@@ -117,12 +119,11 @@ def _fig_solid_setup(model: Model, arrays: ModelArrays, colors: list, joints: di
         ax = fig.add_subplot()
         ax.imshow(image)
         ax.set_axis_off()
-        handles = [h for h in handles if h.get_label() != "fixed block"] + [
-            Patch(facecolor="0.9", edgecolor="0.6", label="fixed block (see-through)")] * bool(np.any(arrays.block_fixed))
     else:
         ax = fig.add_subplot(projection="3d")
         coll = plotting.plot_solid_blocks(ax, arrays.vertices, arrays.mesh)
-        coll.set_facecolor([block_colors[b] for b in arrays.mesh.face_block])
+        alpha = np.where(arrays.block_fixed, FIXED_ALPHA, 1.0)
+        coll.set_facecolor([(*block_colors[b][:3], alpha[b]) for b in arrays.mesh.face_block])
         for p, c, _, _, m in symbols:
             if len(p):
                 ax.plot(*p.T, ls="none", marker=m, color=c)

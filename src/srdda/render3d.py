@@ -71,7 +71,7 @@ def render_blocks(vertices: np.ndarray, mesh: Any, values: np.ndarray | None = N
     light blue; ``opacity`` per block (default opaque). ``points``: (xyz (n,
     3), colour, size in pixels) drawn as spheres; ``segments``: (ends (n, 2,
     3), colour, width in pixels). The camera looks from the (+x, −y, +z)
-    side at the whole scene.
+    side at the whole scene, with the bounding box's axes labelled in metres.
     """
     from matplotlib.colors import to_rgb
 
@@ -110,7 +110,7 @@ def render_blocks(vertices: np.ndarray, mesh: Any, values: np.ndarray | None = N
     plotter.camera_position = "iso"
     plotter.camera.azimuth = -90.0  # iso looks from (+x, +y, +z); turn to the (+x, -y, +z) side
     plotter.reset_camera()
-    plotter.show_axes()
+    plotter.show_grid(xtitle="x (m)", ytitle="y (m)", ztitle="z (m)", color="gray", font_size=10)
     image = plotter.screenshot(return_img=True)
     plotter.close()
     return np.asarray(image)
