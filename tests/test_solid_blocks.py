@@ -169,9 +169,14 @@ def test_3d_figure_and_animation(tmp_path, monkeypatch):
     faces = [c for c in fig.axes[0].collections if isinstance(c, Poly3DCollection)]
     assert len(faces) == 1 and len(faces[0].get_paths()) == 12  # two boxes, six faces each
     assert fig.axes[0].name == "3d" and len(fig.axes[0].lines) == 1  # the measured point's path
-    out = animate(stored, tmp_path / "a.gif", max_frames=5)
+    out = animate(stored, tmp_path / "a.gif", max_frames=5)  # pyvista's frames where it renders
     with Image.open(out) as gif:
         assert gif.n_frames == 5
+    from srdda import animation
+
+    monkeypatch.setattr(animation, "pyvista_renders", lambda: False)  # matplotlib's 3D axes
+    with Image.open(animate(stored, tmp_path / "b.gif", max_frames=4)) as gif:
+        assert gif.n_frames == 4
 
 
 def test_3d_base_acceleration_and_prescribed_motion():

@@ -24,6 +24,7 @@ from .render3d import pyvista_renders, render_blocks  # noqa: E402
 __all__ = ["fig_model_setup", "material_colors"]
 
 FIXED_ALPHA = 0.35  # fixed blocks (ground, slope) are drawn see-through in 3D, so the moving ones show
+MOVING_ALPHA = 0.75  # moving blocks of a 3D model with points, so that points inside them show
 
 
 def material_colors(n: int) -> list[tuple[float, float, float, float]]:
@@ -112,8 +113,11 @@ def _fig_solid_setup(model: Model, arrays: ModelArrays, colors: list, joints: di
     handles += [Line2D([], [], color=c, lw=2.5, label=label) for segs, c, _, label in lines if len(segs)]
     fig = plt.figure(figsize=(8, 7), layout="constrained")
     if pyvista_renders():
+        # points often lie inside or on blocks (a centroid, a hinge between two faces): moving blocks are then
+        # drawn slightly see-through so that they show
+        solid = MOVING_ALPHA if any(len(p) for p, *_ in symbols) else 1.0
         image = render_blocks(arrays.vertices, arrays.mesh, colors=block_colors,
-                              opacity=np.where(arrays.block_fixed, FIXED_ALPHA, 1.0),
+                              opacity=np.where(arrays.block_fixed, FIXED_ALPHA, solid),
                               points=[(p, c, s) for p, c, s, _, _ in symbols],
                               segments=[(s, c, w) for s, c, w, _ in lines])
         ax = fig.add_subplot()

@@ -62,7 +62,7 @@ def render_blocks(vertices: np.ndarray, mesh: Any, values: np.ndarray | None = N
                   cmap: str = "viridis", opacity: Sequence[float] | None = None,
                   points: Sequence[tuple[np.ndarray, str, float]] = (),
                   segments: Sequence[tuple[np.ndarray, str, float]] = (),
-                  size: tuple[int, int] = (900, 700)) -> np.ndarray:
+                  size: tuple[int, int] = (900, 700), bounds: Sequence[float] | None = None) -> np.ndarray:
     """An RGB image (h, w, 3) of 3D blocks rendered off-screen with pyvista.
 
     ``mesh`` is a :class:`~srdda.geometry.polyhedron.PolyhedronMesh`; each
@@ -71,7 +71,9 @@ def render_blocks(vertices: np.ndarray, mesh: Any, values: np.ndarray | None = N
     light blue; ``opacity`` per block (default opaque). ``points``: (xyz (n,
     3), colour, size in pixels) drawn as spheres; ``segments``: (ends (n, 2,
     3), colour, width in pixels). The camera looks from the (+x, −y, +z)
-    side at the whole scene, with the bounding box's axes labelled in metres.
+    side at the whole scene, or at ``bounds`` (xmin, xmax, ymin, ymax, zmin,
+    zmax: the same view for every frame of an animation), with the bounding
+    box's axes labelled in metres.
     """
     from matplotlib.colors import to_rgb
 
@@ -109,8 +111,9 @@ def render_blocks(vertices: np.ndarray, mesh: Any, values: np.ndarray | None = N
             plotter.add_lines(ends.reshape(-1, 3), color=to_rgb(color), width=width)
     plotter.camera_position = "iso"
     plotter.camera.azimuth = -90.0  # iso looks from (+x, +y, +z); turn to the (+x, -y, +z) side
-    plotter.reset_camera()
-    plotter.show_grid(xtitle="x (m)", ytitle="y (m)", ztitle="z (m)", color="gray", font_size=10)
+    plotter.reset_camera(bounds=None if bounds is None else [float(b) for b in bounds])
+    plotter.show_grid(xtitle="x (m)", ytitle="y (m)", ztitle="z (m)", color="gray", font_size=10,
+                      bounds=None if bounds is None else [float(b) for b in bounds])
     image = plotter.screenshot(return_img=True)
     plotter.close()
     return np.asarray(image)
