@@ -30,3 +30,14 @@ def test_slope_check_examples_use_the_verified_cases_settings(name: str, penalty
 def test_results_doc_gives_the_frames_of_3d_rotations() -> None:
     text = (ROOT / "docs" / "results.md").read_text(encoding="utf-8")
     assert "ω in the global (space) frame" in text and "(body frame) to its current one (space frame)" in text
+
+
+def test_example_files_name_only_commands_that_exist() -> None:
+    # cube-drop.toml pointed at `srdda results ... energy`, which does not exist
+    import re
+
+    from srdda.cli import main
+
+    for path in sorted((ROOT / "examples").rglob("*.toml")):
+        for command in re.findall(r"`?srdda ([a-z]+)\b", path.read_text(encoding="utf-8")):
+            assert command in main.commands, (path.name, command)
