@@ -434,7 +434,8 @@ def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str
             (out / "figures" / name).write_bytes(png)
             md += [f"![{run_.title}, figure {i + 1}](figures/{name})", "", f"*{caption}*", ""]
             data = base64.b64encode(png).decode("ascii")
-            hb.append(f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(run_.title)}, figure {i + 1}'>"
+            alt = html.escape(f"{run_.title}, figure {i + 1}")
+            hb.append(f"<figure><img src='data:image/png;base64,{data}' alt='{alt}'>"
                       f"<figcaption>{html.escape(caption)}</figcaption></figure>")
     paper_report_section(out, md, hb)  # the probabilistic rockfall of DIR/ensemble, when one was run there
     md_path, html_path = out / "report.md", out / "report.html"
