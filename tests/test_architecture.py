@@ -35,6 +35,8 @@ TWO_DIMENSIONAL = {
     "report.py": "the report of the paper's 2D examples",
     "cli.py": "the command line (figure sizes, 2D outputs)",
     "cli_results.py": "the command line (figure sizes, 2D outputs)",
+    "modelview.py": "pictures of 2D and 3D models (xyz points, segment ends)",
+    "render3d.py": "3D pictures (xyz points, segment ends)",
     "cases/": "verification problems: models of a given dimension",
     "verify/": "verification problems: models of a given dimension",
 }

@@ -45,6 +45,18 @@ def test_report_is_written_from_its_own_runs(tmp_path: Path, stub_examples: list
     text = md.read_text()
     assert "## Stub rod" in text and "### Table S1" in text and "### Table S2" in text
     assert "## Stub rod\n\nStub choices: a 0.1 m thick rod." in text  # the example's choices, under its title
+    # issue 31 item 5: the inputs open each example, before its results
+    section = text.split("## Stub rod", 1)[1]
+    assert section.index("### Inputs") < section.index("| method | status")
+    for entry in ("| time step Δt |", "| material ", "| default joint |", "| contact penalty k_n |",
+                  "| linear solver |"):
+        assert entry in section.split("| method | status")[0], entry
+    # each caption once (the image's alt text names the figure, it does not repeat the caption)
+    first = section.split("\n## ", 1)[0]
+    captions = re.findall(r"^\*(.+)\*$", first, flags=re.M)
+    assert captions and all(first.count(c) == 1 for c in captions)
+    ledger = next(c for c in captions if c.startswith("Energy ledger"))
+    assert "Kinetic energy:" in ledger and "Balance error" in ledger  # each drawn curve explained
     # every 'ours' number of the report is the value in the run's own results file
     for m in METHODS:
         stored = read_results(tmp_path / "runs" / f"stubrod_{m}.h5")

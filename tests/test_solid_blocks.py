@@ -138,7 +138,7 @@ def test_3d_model_file_runs_and_round_trips(tmp_path):
     np.testing.assert_array_equal(again.array("measured_position"), first.array("measured_position"))
 
 
-def test_3d_figure_and_animation(tmp_path):
+def test_3d_figure_and_animation(tmp_path, monkeypatch):
     from PIL import Image
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
@@ -156,14 +156,27 @@ def test_3d_figure_and_animation(tmp_path):
     settings = srdda.RunSettings(dt=1e-3, n_steps=30, contacts=False)
     srdda.run(m, settings, recorders=[ResultsStore(tmp_path / "r.h5", settings)])
     stored = read_results(tmp_path / "r.h5")
+    from srdda import render3d
+
+    if render3d.pyvista_renders():  # pyvista's picture in the figure, with matplotlib's colour bar
+        fig = plotting.fig_model(stored)
+        (image,) = fig.axes[0].get_images()
+        assert np.mean(np.asarray(image.get_array()).min(axis=2) < 250) > 0.02  # the boxes are drawn
+        assert fig.axes[1].get_ylabel() == "speed (m/s)"
+    monkeypatch.setattr(render3d, "pyvista_renders", lambda: False)  # the matplotlib fallback
     fig = plotting.fig_model(stored)
     fig.canvas.draw()  # a 3D collection projects its faces when drawn
     faces = [c for c in fig.axes[0].collections if isinstance(c, Poly3DCollection)]
     assert len(faces) == 1 and len(faces[0].get_paths()) == 12  # two boxes, six faces each
     assert fig.axes[0].name == "3d" and len(fig.axes[0].lines) == 1  # the measured point's path
-    out = animate(stored, tmp_path / "a.gif", max_frames=5)
+    out = animate(stored, tmp_path / "a.gif", max_frames=5)  # pyvista's frames where it renders
     with Image.open(out) as gif:
         assert gif.n_frames == 5
+    from srdda import animation
+
+    monkeypatch.setattr(animation, "pyvista_renders", lambda: False)  # matplotlib's 3D axes
+    with Image.open(animate(stored, tmp_path / "b.gif", max_frames=4)) as gif:
+        assert gif.n_frames == 4
 
 
 def test_3d_base_acceleration_and_prescribed_motion():

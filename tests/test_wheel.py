@@ -75,3 +75,8 @@ def test_the_wheel_runs_the_paper_rod_from_any_folder(tmp_path: Path) -> None:
     areas = [r["ours"] for r in document["rows"] if r["quantity"] == "area" and r["method"] == "srdda"]
     assert areas and all(abs(a - 1.0) < 1e-6 for a in areas)
     assert list(work.iterdir()) == []  # `srdda paper` without --report writes nothing
+    # the README's convert example and `srdda show` from the wheel: the Shi-format input ships as package data
+    converted = _run([str(srdda), "convert", "--example", "circleslope", "-o", "slope.toml"], cwd=work)
+    assert converted.returncode == 0 and "7 blocks" in converted.stdout, converted.stdout
+    shown = _run([str(srdda), "show", "slope.toml", "-o", "slope.png"], cwd=work)
+    assert shown.returncode == 0 and (work / "slope.png").stat().st_size > 10_000, shown.stdout

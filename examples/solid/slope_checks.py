@@ -10,6 +10,7 @@ Each file opens with the closed-form prediction. They need 3D contacts to run.
 Run: python examples/solid/slope_checks.py
 """
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import tomli_w
@@ -24,9 +25,10 @@ HERE = Path(__file__).parent
 SETTINGS = RunSettings(dt=1e-3, n_steps=1000, method="srdda")
 
 
-def write(model, title: str, lines: list[str], name: str) -> None:
+def write(model, title: str, lines: list[str], name: str, penalty: float) -> None:
+    """The model file ``name`` with the run settings of its verification case (k_n = ``penalty``)."""
     header = "".join(f"# {line}\n" for line in [title, *lines, "Written by examples/solid/slope_checks.py."])
-    text = header + tomli_w.dumps(model_to_dict(model, SETTINGS, title))
+    text = header + tomli_w.dumps(model_to_dict(model, replace(SETTINGS, penalty=penalty), title))
     (HERE / name).write_text(text, encoding="utf-8")
     print(f"{name}: {title}")
 
@@ -40,7 +42,7 @@ for case in SLIDE_TOPPLE_CASES:
            f"predicted: {case.mode}; sliding acceleration g(sin psi - cos psi tan phi) = {a:.4f} m/s2"
            + (f"; initial toppling angular acceleration about the down-dip edge {alpha:.4f} rad/s2"
               if alpha > 0 and a == 0 else "")],
-          f"slide-topple-{case.name.replace(' ', '-')}.toml")
+          f"slide-topple-{case.name.replace(' ', '-')}.toml", penalty=1e10)  # as srdda verify slide-topple-3d
 
 for fs in (1.2, 0.8):
     phi = wedge_friction_for(fs)
@@ -54,4 +56,4 @@ for fs in (1.2, 0.8):
            f"predicted: FS = {s.factor_of_safety:.4f}; "
            + ("the wedge stays" if fs >= 1 else
               f"slides along the line of intersection at a = g sin(psi_i)(1 - FS) = {s.acceleration:.5f} m/s2")],
-          f"wedge-fs{fs:g}.toml")
+          f"wedge-fs{fs:g}.toml", penalty=1e11)  # as srdda verify wedge-3d

@@ -1,8 +1,9 @@
 """The ``srdda`` command line: run model files and the paper's examples.
 
-Errors in the input are reported as one message naming the field (exit 2);
-an output that cannot be written (held by another run, holding a finished
-run's results, a folder not writable, a full disk) as one message saying what
+Errors in the input are reported as one message naming the field (exit 2),
+and so is an output that already holds a finished run's results (exit 2: pass
+--overwrite or choose another --out); an output that cannot be written (held
+by another run, a folder not writable, a full disk) as one message saying what
 is kept (exit 1); a run that diverges stops, keeps what it recorded and exits with 3.
 """
 from __future__ import annotations
@@ -33,7 +34,13 @@ from .simulation import run
 from .solvers import available_solvers, get_solver
 from .step import Stepper
 
-__all__ = ["main"]
+__all__ = ["main", "BadInput"]
+
+
+class BadInput(click.ClickException):
+    """Bad input or usage reported as one message without the usage text: exit 2 (docs/cli.md)."""
+
+    exit_code = 2
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -132,6 +139,8 @@ def output_folder(model: str, out: str | None) -> Path:
 @click.option("--steps", type=click.IntRange(min=0), help="Override the number of steps.")
 @click.option("--end-time", type=float, default=None,
               help="Run until this time (s) instead of the model's step count (with --steps: the first reached).")
+@click.option("--dt", type=click.FloatRange(min=0, min_open=True), default=None,
+              help="Override the model's time step (s).")
 @click.option("--out", "out", type=click.Path(file_okay=False), default=None,
               help="Output folder (default: a new folder named after MODEL in the current directory: "
                    "NAME, or NAME-2, NAME-3, ... if that exists).")
@@ -141,8 +150,8 @@ def output_folder(model: str, out: str | None) -> Path:
               help="Continue the run of a results.h5 from its last flush (instead of MODEL).")
 @click.option("--flush-every", type=click.IntRange(min=1), default=100, show_default=True,
               help="Recorded steps between flushes of results.h5 (what a killed run can lose).")
-def run_command(model: str | None, method: str | None, steps: int | None, end_time: float | None, out: str | None,
-                overwrite: bool, quiet: bool, resume_file: str | None, flush_every: int) -> None:
+def run_command(model: str | None, method: str | None, steps: int | None, end_time: float | None, dt: float | None,
+                out: str | None, overwrite: bool, quiet: bool, resume_file: str | None, flush_every: int) -> None:
     """Run a model file; write results.h5 (see srdda plot/animate/vtk) and its time histories."""
     if resume_file is not None:
         if model is not None:
@@ -155,6 +164,8 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
     mdl, settings = _load(model)
     if method:
         settings = _override(settings, "--method", method=method)
+    if dt is not None:
+        settings = _override(settings, "--dt", dt=dt)
     if steps is not None or end_time is not None:
         settings = _override(settings, "--steps/--end-time", n_steps=steps,
                              end_time=settings.end_time if end_time is None else end_time)
@@ -165,7 +176,7 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
     try:
         store.acquire()  # before the run starts: fail at once if the output is taken
     except OutputExistsError as exc:
-        raise click.ClickException(f"{exc}; pass --overwrite to replace them, choose another --out, or (a run "
+        raise BadInput(f"{exc}; pass --overwrite to replace them, choose another --out, or (a run "
                                    f"that did not finish) continue it with: srdda run --resume {store.path}") from None
     except ResultsWriteError as exc:
         raise click.ClickException(str(exc)) from None
@@ -198,6 +209,36 @@ def check_command(model: str) -> None:
     length = f"{settings.n_steps} steps" if settings.n_steps is not None else f"until t = {settings.end_time} s"
     click.echo(f"ok: {arrays.n_blocks} blocks ({arrays.block_type.dim}D), {len(arrays.vertices)} vertices, method "
                f"{settings.method}, {length} of {settings.dt} s")
+
+
+@main.command("show")
+@click.argument("model", type=click.Path(exists=True, dir_okay=False))
+@click.option("-o", "--out", type=click.Path(dir_okay=False), default=None,
+              help="Image file (png, pdf, svg; default: MODEL's name + .png in the current directory).")
+def show_command(model: str, out: str | None) -> None:
+    """Draw a model file before running it: blocks by material, joints, fixed points, bolts, measured points."""
+    from .modelview import fig_model_setup
+
+    mdl, settings = _load(model)
+    _compile(mdl, settings, model)
+    path = Path(out) if out else Path(f"{Path(model).stem}.png")
+    fig = fig_model_setup(mdl, read_title(model))
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=120)
+    except OSError as exc:
+        raise click.ClickException(f"cannot write {path} ({exc.strerror})") from None
+    click.echo(f"wrote {path}")
+
+
+def read_title(model: str) -> str:
+    """The model file's ``title`` (else its file name) for a picture's title."""
+    import tomllib
+
+    try:
+        return str(tomllib.loads(read_model_text(model)).get("title") or Path(model).name)
+    except (tomllib.TOMLDecodeError, OSError):
+        return Path(model).name
 
 
 @main.command("info")
@@ -283,28 +324,37 @@ def paper_command(example: str, method: str, as_json: bool, report_dir: str | No
 @click.argument("cases", nargs=-1)
 @click.option("--json", "as_json", is_flag=True, help='Print {"rows": [...]} instead of the table.')
 @click.option("--quick", is_flag=True, help="Shorter runs of the cases whose tolerances hold for them.")
-def verify_command(cases: tuple[str, ...], as_json: bool, quick: bool) -> None:
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def verify_command(cases: tuple[str, ...], as_json: bool, quick: bool, quiet: bool) -> None:
     """Run the verification cases (all, or CASES) against their references (docs/verification.md).
 
     Exit code 1 if any row exceeds its tolerance.
     """
     import time
 
-    from .verify import CASES, UnknownCaseError, get_case, run_case
+    from .verify import CASES, UnknownCaseError, expected_seconds, get_case, run_case
 
     try:
         names = [get_case(name).name for name in cases] or list(CASES)
     except UnknownCaseError as exc:
         raise click.UsageError(str(exc)) from None
+    estimates = [expected_seconds(name, quick) for name in names]
     rows: list[dict] = []
-    for name in names:
-        start = time.perf_counter()
-        try:
-            rows += run_case(name, quick)
-        except RuntimeError as exc:
-            raise click.ClickException(f"verification case {name}: {exc}") from None
-        if not as_json:
-            click.echo(f"{name}: {time.perf_counter() - start:.1f} s", err=True)
+    # the bar counts the cases' expected seconds on the reference machine: its remaining time is that
+    # estimate scaled by how fast this machine has gone so far
+    with tqdm(total=round(sum(estimates)), unit="s", desc="verify", disable=True if quiet else None,
+              bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} s of the reference machine "
+                         "[{elapsed}<{remaining}]") as bar:
+        for name, estimate in zip(names, estimates):
+            bar.set_description(f"verify {name}")
+            start = time.perf_counter()
+            try:
+                rows += run_case(name, quick)
+            except RuntimeError as exc:
+                raise click.ClickException(f"verification case {name}: {exc}") from None
+            bar.update(round(estimate))
+            if not as_json:
+                bar.write(f"{name}: {time.perf_counter() - start:.1f} s", file=sys.stderr)
     if as_json:
         click.echo(json.dumps({"rows": rows}, indent=1))
     else:
@@ -335,7 +385,7 @@ def verify_command(cases: tuple[str, ...], as_json: bool, quick: bool) -> None:
               help="Wall-time limit per model (s); a model that reaches it is reported with the steps it made.")
 def bench_command(as_json: bool, quick: bool, models: tuple[str, ...], steps: int | None, dt: float | None,
                   method: str, timeout: float) -> None:
-    """Time the standard benchmark models (issue 14), each in a fresh process: steps/s, solves, memory."""
+    """Time the standard benchmark models, each in a fresh process: steps/s, solves, memory (docs/performance.md)."""
     from .bench.runner import CASES, QUICK, format_table, run_cases
 
     unknown = [m for m in models if m not in CASES]

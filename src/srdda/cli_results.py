@@ -87,34 +87,50 @@ def report_paper(directory: str, names: list[str], methods: list[str], quiet: bo
     return [{"example": r.name, "rows": r.rows} for r in runs], any(r.errors for r in runs)
 
 
+PLOTS = ("model", "trajectories", "centroids", "series", "energy", "block-energy")
+
+
 @click.command("plot")
 @click.argument("run", type=RUN)
-@click.option("--what", type=click.Choice(["model", "trajectories", "centroids", "series"]), default="model",
-              show_default=True, help="The blocks at a step, measured-point or centroid paths, or a time series.")
+@click.option("--what", type=click.Choice(PLOTS), default=None,
+              help="The blocks at a step, measured-point or centroid paths, time series, the energy ledger (one "
+                   "panel per entry) or each block's energies (default: series when --quantity is given, else "
+                   "model).")
 @click.option("--step", type=int, default=None, help="Recorded step to draw the model at (default: the last).")
 @click.option("--quantity", "quantities", multiple=True,
-              help="For --what series: e.g. energy.total, velocity.omega, area, stress.sxx (repeatable).")
+              help="A time series: e.g. energy (the whole ledger), energy.kinetic, velocity.omega, stress.sxx, "
+                   "area (repeatable: one figure each).")
+@click.option("--block", "blocks", multiple=True,
+              help="For --what block-energy: a block name or index (repeatable; default: the moving blocks, at "
+                   "most 6).")
 @click.option("--color", default="speed", show_default=True,
               help="Block colour for --what model: speed, area_change, velocity.omega, stress.sxx, ... or none.")
 @click.option("-o", "--out", type=click.Path(dir_okay=False), default=None,
               help="Image file (png, pdf, svg; default: RUN's name + _WHAT.png).")
-def plot_command(run: str, what: str, step: int | None, quantities: tuple[str, ...], color: str,
-                 out: str | None) -> None:
-    """Draw a results file RUN (or srdda run's output folder): the model at a step, trajectories or time series."""
+def plot_command(run: str, what: str | None, step: int | None, quantities: tuple[str, ...], blocks: tuple[str, ...],
+                 color: str, out: str | None) -> None:
+    """Draw a results file RUN (or srdda run's output folder): the model at a step, paths, time series, energies."""
     from . import plotting
 
     res = _read(run)
+    what = what or ("series" if quantities else "model")
     try:
         if what == "model":
             index = -1 if step is None else plotting.step_index(res, step)
             figs = {"model": plotting.fig_model(res, index, None if color == "none" else color)}
         elif what in ("trajectories", "centroids"):
             figs = {what: plotting.fig_trajectories(res, "measured" if what == "trajectories" else "centroid")}
+        elif what == "energy":
+            figs = {"energy": plotting.fig_energy_ledger(res)}
+        elif what == "block-energy":
+            figs = {"block_energy": plotting.fig_block_energies(res, _stored_arrays(res),
+                                                                _block_indices(res, blocks) or None)}
         else:
             if not quantities:
-                raise click.UsageError("--what series needs --quantity; one of: "
+                raise click.UsageError("--what series needs --quantity; one of: energy, "
                                        + ", ".join(plotting.quantity_names(res)))
-            figs = {q: plotting.fig_time_series(res, q) for q in quantities}
+            figs = {q: plotting.fig_energy_ledger(res) if q == "energy" else plotting.fig_time_series(res, q)
+                    for q in quantities}
     except (KeyError, ValueError) as exc:
         raise click.UsageError(str(exc.args[0] if exc.args else exc)) from None
     base = _writable(Path(out) if out else Path(res.path).with_name(f"{Path(res.path).stem}_{what}.png"))
@@ -127,6 +143,29 @@ def plot_command(run: str, what: str, step: int | None, quantities: tuple[str, .
         click.echo(f"wrote {path}")
 
 
+def _block_indices(res: StoredResult, blocks: tuple[str, ...]) -> list[int]:
+    """Block indices of ``--block`` values (names or indices); one message naming a block that is not there."""
+    out = []
+    for b in blocks:
+        if b in res.block_names:
+            out.append(res.block_names.index(b))
+        elif b.isdigit() and int(b) < len(res.block_names):
+            out.append(int(b))
+        else:
+            raise click.UsageError(f"--block {b!r}: no such block; the blocks are {', '.join(res.block_names)}")
+    return out
+
+
+def _stored_arrays(res: StoredResult):
+    """The model arrays stored in a results file (masses, gravity, block type for per-block energies)."""
+    from .io.results_store import model_arrays_from_file
+
+    try:
+        return model_arrays_from_file(res.path)
+    except ResultsFileError as exc:
+        raise click.UsageError(str(exc)) from None
+
+
 @click.command("animate")
 @click.argument("run", type=RUN)
 @click.option("-o", "--out", type=click.Path(dir_okay=False), required=True, help="Output .gif or .mp4.")
@@ -134,7 +173,8 @@ def plot_command(run: str, what: str, step: int | None, quantities: tuple[str, .
 @click.option("--frames", type=click.IntRange(min=1), default=200, show_default=True,
               help="At most this many recorded steps, evenly spread.")
 @click.option("--color", default="speed", show_default=True, help="Block colour (as for plot) or none.")
-def animate_command(run: str, out: str, fps: int, frames: int, color: str) -> None:
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def animate_command(run: str, out: str, fps: int, frames: int, color: str, quiet: bool) -> None:
     """Animate a results file RUN into a GIF or MP4 (MP4 needs ffmpeg: srdda[mp4]; else GIF)."""
     from .animation import animate
 
@@ -145,7 +185,14 @@ def animate_command(run: str, out: str, fps: int, frames: int, color: str) -> No
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            path = animate(res, out, fps=fps, max_frames=frames, color=None if color == "none" else color)
+            with tqdm(total=min(frames, len(res.step)), unit="frame", desc="animate",
+                      disable=True if quiet else None) as bar:
+                def tick(frame: int, n_frames: int) -> None:
+                    bar.total = n_frames
+                    bar.update(1)
+
+                path = animate(res, out, fps=fps, max_frames=frames, color=None if color == "none" else color,
+                               progress=tick)
         except (KeyError, ValueError) as exc:
             raise click.UsageError(str(exc.args[0] if exc.args else exc)) from None
         except OSError as exc:
@@ -158,16 +205,21 @@ def animate_command(run: str, out: str, fps: int, frames: int, color: str) -> No
 @click.command("vtk")
 @click.argument("run", type=RUN)
 @click.option("-o", "--out", type=click.Path(file_okay=False), required=True, help="Output folder.")
-@click.option("--every", type=click.IntRange(min=1), default=1, show_default=True,
-              help="Write every N-th recorded step (and the last).")
-def vtk_command(run: str, out: str, every: int) -> None:
-    """Write ParaView files (VTU per step, PVD series) of a results file RUN."""
-    from .io.vtk import write_vtu_series
+@click.option("--every", type=click.IntRange(min=1), default=None,
+              help="Write every N-th recorded step (and the last); default: the smallest N that keeps each series "
+                   "at or under 200 files.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def vtk_command(run: str, out: str, every: int | None, quiet: bool) -> None:
+    """Write ParaView files (VTU per step, PVD series) of a results file RUN: blocks, contacts, bolts."""
+    from .io.vtk import default_every, series_rows, write_vtu_series
 
     res = _read(run)
     _writable(Path(out), folder=True)
+    every = default_every(len(res.step)) if every is None else every
     try:
-        pvds = write_vtu_series(res, out, every=every)
+        with tqdm(total=len(series_rows(len(res.step), every)), unit="step", desc="vtk",
+                  disable=True if quiet else None) as bar:
+            pvds = write_vtu_series(res, out, every=every, progress=lambda: bar.update(1))
     except OSError as exc:
         raise click.ClickException(f"cannot write in {out} ({exc.strerror})") from None
     for path in pvds.values():

@@ -18,9 +18,11 @@ from .constraints.data import BoltSpec, ConstraintArrays, HingeSpec, PrescribedS
 from .history import HistoryError, MotionHistory, TimeHistory
 from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon, overlapping_pairs
 from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_polyhedra, normalize_polyhedron,
-                                  polyhedron_covers, polyhedron_moments, prism)
+                                  PolyhedronError, box, polyhedron_covers, polyhedron_moments, prism)
 from .kinematics.blocktype import PLANE, SOLID, BlockType, block_type_of_dimension
 from .kinematics.shape3d import elasticity_matrix_3d
+from .kinematics.update import rotate_symmetric_components
+from .kinematics.update3d import rotate_symmetric_components_3d
 
 __all__ = ["JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
 
@@ -619,6 +621,100 @@ class Model:
             out.base_acceleration = self.base_acceleration.padded(SOLID.dim)
         out.bolts = [replace(b, point_a=at(b.point_a), point_b=at(b.point_b)) for b in self.bolts]
         return out
+
+    def add_box(self, lo: Sequence[float], hi: Sequence[float], material: str, **options: object) -> int:
+        """Add the axis-aligned box [lo, hi] (3D, m) as a polyhedral block; returns its index.
+
+        ``options`` are those of :meth:`add_polyhedron` (velocity, angular_velocity,
+        stress, name, fixed, face_joints; faces in the order of
+        :func:`srdda.geometry.polyhedron.box`). Turn it with :meth:`rotate`.
+        """
+        try:
+            vertices, faces = box(lo, hi, str(options.get("name") or f"block {len(self.blocks)}"))
+        except PolyhedronError as exc:
+            raise ModelError(str(exc)) from None
+        return self.add_polyhedron(vertices, faces, material, **options)  # type: ignore[arg-type]
+
+    # -- placing blocks ----------------------------------------------------
+    def block_masses(self) -> np.ndarray:
+        """Mass (nb,) of every block, kg (per m of thickness in 2D): density × volume as built."""
+        return self.arrays().block_mass
+
+    def translate(self, offset: Sequence[float], blocks: Sequence[int | str] | None = None) -> None:
+        """Move blocks (all, or ``blocks``: indices or names) by ``offset`` (m), with the points on them."""
+        self._move(np.eye(self.dim), np.zeros(self.dim), np.asarray(_finite(offset, "offset")), blocks)
+
+    def rotate(self, angle: float, about: Sequence[float] | None = None, axis: Sequence[float] | None = None,
+               blocks: Sequence[int | str] | None = None) -> None:
+        """Turn blocks (all, or ``blocks``: indices or names) by ``angle`` degrees about the point ``about``.
+
+        2D: counter-clockwise about ``about`` (default the origin). 3D: right-handed
+        about the line through ``about`` along ``axis`` (default z). The blocks'
+        velocities, angular velocities and initial stresses turn with them; the
+        fixed points, point loads, point springs and measured points on them move
+        with them (a load's force keeps its direction). Hinges, springs, driven
+        points and bolts are placed in the turned model: add them after turning.
+        """
+        theta = np.radians(_finite(angle, "angle")[0])
+        if self.dim == PLANE.dim:
+            c, s = np.cos(theta), np.sin(theta)
+            rotation = np.array([[c, -s], [s, c]])
+        else:
+            k = np.asarray(_finite(axis if axis is not None else (0.0, 0.0, 1.0), "axis"))
+            if k.shape != (SOLID.dim,) or not np.linalg.norm(k) > 0:
+                raise ModelError(f"axis must be a non-zero [x, y, z] vector, got {k.tolist()}")
+            k = k / np.linalg.norm(k)
+            cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+            rotation = np.eye(SOLID.dim) + np.sin(theta) * cross + (1 - np.cos(theta)) * cross @ cross  # Rodrigues
+        centre = np.zeros(self.dim) if about is None else np.asarray(_finite(about, "about"))
+        if centre.shape != (self.dim,):
+            raise ModelError(f"about must be a point with {self.dim} coordinates, got {centre.tolist()}")
+        self._move(rotation, centre, np.zeros(self.dim), blocks)
+
+    def _move(self, rotation: np.ndarray, centre: np.ndarray, offset: np.ndarray,
+              blocks: Sequence[int | str] | None) -> None:
+        """x -> R (x - centre) + centre + offset for the chosen blocks and the points on them."""
+        if not self.blocks:
+            raise ModelError("the model has no blocks to move")
+        if offset.shape != (self.dim,):
+            raise ModelError(f"offset must have {self.dim} components, got {offset.tolist()}")
+        names = [b.name for b in self.blocks]
+        chosen = set(range(len(self.blocks))) if blocks is None else set()
+        for b in blocks or ():
+            if isinstance(b, str):
+                if b not in names:
+                    raise ModelError(f"no block named {b!r}")
+                chosen.add(names.index(b))
+            elif not 0 <= int(b) < len(self.blocks):
+                raise ModelError(f"no block {b} (the model has {len(self.blocks)})")
+            else:
+                chosen.add(int(b))
+        linked = [s.block_a for s in (*self.hinges, *self.springs, *self.bolts)] + [
+            s.block_b for s in (*self.hinges, *self.springs, *self.bolts)] + [p.block for p in self.prescribed]
+        if chosen & {b for b in linked if b is not None}:
+            raise ModelError("move or turn blocks before adding hinges, springs, driven points or bolts to them")
+
+        def at(p: np.ndarray) -> np.ndarray:
+            return (np.asarray(p, dtype=float) - centre) @ rotation.T + centre + offset
+
+        bt = block_type_of_dimension(self.dim)
+        for k in chosen:
+            b = self.blocks[k]
+            velocity = np.asarray(b.velocity, dtype=float)
+            velocity[bt.translation] = rotation @ velocity[bt.translation]
+            if self.dim == SOLID.dim:
+                velocity[bt.rotation] = rotation @ velocity[bt.rotation]
+                stress = rotate_symmetric_components_3d(np.asarray([b.stress]), rotation[None], 1.0)[0]
+            else:
+                stress = rotate_symmetric_components(np.asarray([b.stress]), np.arctan2(rotation[1, 0],
+                                                                                        rotation[0, 0]), 1.0)[0]
+            self.blocks[k] = replace(b, vertices=at(b.vertices), velocity=tuple(velocity.tolist()),
+                                     stress=tuple(stress.tolist()))
+        self.fixed_points = [(b, at(p) if b in chosen else p, k) for b, p, k in self.fixed_points]
+        self.point_loads = [(b, at(p) if b in chosen else p, f) for b, p, f in self.point_loads]
+        self.measured_points = [(b, at(p) if b in chosen else p) for b, p in self.measured_points]
+        self.point_springs = [(a, at(pa) if a in chosen else pa, b, at(pb) if b in chosen else pb, k)
+                              for a, pa, b, pb, k in self.point_springs]
 
     # -- compiling ---------------------------------------------------------
     def arrays(self) -> ModelArrays:

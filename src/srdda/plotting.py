@@ -41,15 +41,21 @@ __all__ = ["history", "quantity_names", "block_values", "method_label", "plot_bl
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
            "fig_trajectories", "fig_time_series", "plot_bolts", "fig_bolt_forces",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index",
-           "quantity_unit", "quantity_label", "fig_energy_ledger", "ledger_series", "LEDGER_PANELS"]
+           "quantity_unit", "quantity_label", "quantity_words", "fig_energy_ledger", "ledger_series", "ledger_panels",
+           "LEDGER_PANELS",
+           "block_energies", "fig_block_energies", "ENERGY_WORDS"]
 
 Results = Any  # Result or StoredResult: both have .array(name), .block_names, .method
 Background = tuple[np.ndarray, np.ndarray]  # (vertices, block_ptr) of blocks drawn grey (slopes, ground)
 
 ENERGY_NAMES = ("kinetic", "gravity", "elastic", "spring", "total")
 VELOCITY_COMPONENTS = ("vx", "vy", "omega", "exx_rate", "eyy_rate", "gxy_rate")
+VELOCITY_COMPONENTS_3D = ("vx", "vy", "vz", "omega_x", "omega_y", "omega_z", "exx_rate", "eyy_rate", "ezz_rate",
+                          "gyz_rate", "gzx_rate", "gxy_rate")
 STRESS_COMPONENTS = ("sxx", "syy", "sxy")
+STRESS_COMPONENTS_3D = ("sxx", "syy", "szz", "syz", "szx", "sxy")
 XY = ("x", "y")
+XYZ = ("x", "y", "z")
 MAX_LEGEND = 12  # more lines than this get no legend (it would cover the plot)
 
 
@@ -59,13 +65,23 @@ def _energy_names(res: Results) -> tuple[str, ...]:
     return tuple(res.energy[0]) if res.energy else ENERGY_NAMES
 
 
+def _components(res: Results) -> dict[str, tuple[str, ...]]:
+    """The component names of the vector histories of ``res`` (2D or 3D)."""
+    solid = _dim(res) == 3
+    coords = XYZ if solid else XY
+    return {"velocity": VELOCITY_COMPONENTS_3D if solid else VELOCITY_COMPONENTS,
+            "stress": STRESS_COMPONENTS_3D if solid else STRESS_COMPONENTS, "centroid": coords,
+            "measured_position": coords, "measured_velocity": coords}
+
+
 def history(res: Results, name: str) -> np.ndarray:
     """A recorded quantity as an array (first axis = recorded step).
 
     ``name`` is a history (``time``, ``centroid``, ``velocity``, ...), an energy
     (``energy.kinetic``), a velocity component (``velocity.omega``, ``vx`` ...
-    see ``VELOCITY_COMPONENTS``), a stress component (``stress.sxx``) or a
-    coordinate of a 2-vector history (``measured_position.y``, ``centroid.x``).
+    see ``VELOCITY_COMPONENTS``, ``VELOCITY_COMPONENTS_3D``), a stress
+    component (``stress.sxx``) or a coordinate of a vector history
+    (``measured_position.y``, ``centroid.x``).
     """
     if "." not in name:
         return np.asarray(res.array(name))
@@ -75,8 +91,7 @@ def history(res: Results, name: str) -> np.ndarray:
         if part not in names:
             raise KeyError(f"no energy {part!r}; energies are {names}")
         return np.asarray(res.array("energy"))[:, names.index(part)]
-    comps = {"velocity": VELOCITY_COMPONENTS, "stress": STRESS_COMPONENTS, "centroid": XY,
-             "measured_position": XY, "measured_velocity": XY}.get(base)
+    comps = _components(res).get(base)
     if comps is None or part not in comps:
         raise KeyError(f"unknown quantity {name!r}; try one of {quantity_names(res)}")
     return np.asarray(res.array(base))[..., comps.index(part)]
@@ -84,18 +99,43 @@ def history(res: Results, name: str) -> np.ndarray:
 
 def quantity_names(res: Results) -> list[str]:
     """Every name :func:`history` accepts for ``res``."""
+    comps = _components(res)
     return (["area", "rotation", "iterations", "bolt_force", "bolt_shear_force"]
-            + [f"velocity.{c}" for c in VELOCITY_COMPONENTS]
-            + [f"stress.{c}" for c in STRESS_COMPONENTS] + [f"energy.{e}" for e in _energy_names(res)]
-            + [f"{v}.{c}" for v in ("centroid", "measured_position", "measured_velocity") for c in XY])
+            + [f"velocity.{c}" for c in comps["velocity"]]
+            + [f"stress.{c}" for c in comps["stress"]] + [f"energy.{e}" for e in _energy_names(res)]
+            + [f"{v}.{c}" for v in ("centroid", "measured_position", "measured_velocity") for c in comps[v]])
 
 
 _UNITS = {"time": "s", "step": "step", "area": "m²", "rotation": "rad", "iterations": "solves",
-          "velocity.vx": "m/s", "velocity.vy": "m/s", "velocity.omega": "rad/s", "velocity.exx_rate": "1/s",
-          "velocity.eyy_rate": "1/s", "velocity.gxy_rate": "1/s", "stress": "Pa", "centroid": "m",
-          "measured_position": "m", "measured_velocity": "m/s", "closed_contacts": "contacts",
-          "max_penetration": "m", "multipliers": "N/m", "speed": "m/s", "area_change": "1",
-          "bolt_force": "N", "bolt_shear_force": "N", "bolt_broken": "1", "bolt_break_time": "s"}
+          "velocity.vx": "m/s", "velocity.vy": "m/s", "velocity.vz": "m/s", "velocity.omega": "rad/s",
+          "velocity.omega_x": "rad/s", "velocity.omega_y": "rad/s", "velocity.omega_z": "rad/s", "velocity": "1/s",
+          "stress": "Pa", "centroid": "m", "measured_position": "m", "measured_velocity": "m/s",
+          "closed_contacts": "contacts", "max_penetration": "m", "multipliers": "N/m", "speed": "m/s",
+          "area_change": "1", "bolt_force": "N", "bolt_shear_force": "N", "bolt_broken": "1", "bolt_break_time": "s"}
+
+# What each quantity is, in words, for axis labels (energies: the ledger's entries, srdda.ledger)
+ENERGY_WORDS = {"kinetic": "kinetic energy", "gravity": "gravitational energy (every block, fixed ones included)",
+                "elastic": "strain energy of the blocks", "spring": "energy in springs and penalty supports",
+                "contact": "energy in the contact springs", "total": "total stored energy",
+                "work_loads": "work of loads and base acceleration", "work_prescribed": "work of prescribed motion",
+                "work_constraints": "work of hinge forces", "dissipated": "energy dissipated by dashpots",
+                "dissipated_friction": "energy dissipated by friction",
+                "dissipated_contact": "energy taken out by the contact penalty",
+                "dissipated_springs": "energy taken out by the springs' step force",
+                "balance": "energy balance E − W_in + D"}
+_COMPONENT_WORDS = {"vx": "velocity x", "vy": "velocity y", "vz": "velocity z", "omega": "angular velocity ω",
+                    "omega_x": "angular velocity ωx", "omega_y": "angular velocity ωy",
+                    "omega_z": "angular velocity ωz", "exx_rate": "strain rate ε̇x", "eyy_rate": "strain rate ε̇y",
+                    "ezz_rate": "strain rate ε̇z", "gxy_rate": "shear strain rate γ̇xy",
+                    "gyz_rate": "shear strain rate γ̇yz", "gzx_rate": "shear strain rate γ̇zx",
+                    "sxx": "normal stress σx", "syy": "normal stress σy", "szz": "normal stress σz",
+                    "sxy": "shear stress τxy", "syz": "shear stress τyz", "szx": "shear stress τzx"}
+_WORDS = {"time": "time", "step": "step", "area": "area", "rotation": "rotation", "iterations": "linear solves",
+          "centroid": "centroid", "measured_position": "measured point", "measured_velocity": "measured point velocity",
+          "closed_contacts": "closed contacts", "max_penetration": "deepest penetration",
+          "multipliers": "hinge multipliers", "speed": "speed", "area_change": "area change A/A₀ − 1",
+          "bolt_force": "bolt axial force", "bolt_shear_force": "bolt shear force", "bolt_broken": "bolt broken",
+          "bolt_break_time": "bolt break time"}
 
 
 def _dim(res: Results) -> int:
@@ -106,24 +146,37 @@ def quantity_unit(res: Results, name: str) -> str:
     """SI unit of a :func:`history` name (or ``speed``, ``area_change``) of ``res``, for axis labels.
 
     Energies are J per metre of thickness in 2D and J in 3D; ``area`` is m² in
-    2D and the volume (m³) in 3D.
+    2D and the volume (m³) in 3D; forces are N per metre in 2D, N in 3D.
     """
     base = name.split(".", 1)[0]
     if base == "energy":
         return "J/m" if _dim(res) == 2 else "J"
     if name == "area" and _dim(res) == 3:
         return "m³"
-    if name == "multipliers" and _dim(res) == 3:
-        return "N"
+    if name in ("multipliers", "bolt_force", "bolt_shear_force"):
+        return "N/m" if _dim(res) == 2 else "N"
     unit = _UNITS.get(name, _UNITS.get(base))
     if unit is None:
         raise KeyError(f"no unit known for {name!r}")
     return unit
 
 
+def quantity_words(res: Results, name: str) -> str:
+    """What a :func:`history` name is, in words: ``"normal stress σx"``, ``"kinetic energy"``, ``"centroid x"``."""
+    base, _, part = name.partition(".")
+    if base == "energy":
+        return ENERGY_WORDS.get(part, f"energy {part}")
+    if name == "area" and _dim(res) == 3:
+        return "volume"
+    if base in ("velocity", "stress"):
+        return _COMPONENT_WORDS.get(part, name)
+    words = _WORDS.get(base, base.replace("_", " "))
+    return f"{words} {part}" if part else words
+
+
 def quantity_label(res: Results, name: str) -> str:
-    """An axis or colour-bar label: the quantity's name and its unit, ``"stress.sxx (Pa)"``."""
-    return f"{name} ({quantity_unit(res, name)})"
+    """An axis or colour-bar label: the quantity in words and its unit, ``"normal stress σx (Pa)"``."""
+    return f"{quantity_words(res, name)} ({quantity_unit(res, name)})"
 
 
 def step_index(res: Results, step: int) -> int:
@@ -364,19 +417,40 @@ def solid_limits(ax: Any, points: np.ndarray) -> None:
 
 
 def fig_solid_model(res: Results, index: int = -1, color: str | None = "speed", trails: bool = True) -> Figure:
-    """3D blocks at recorded step ``index`` (their faces), with the measured points' paths so far."""
+    """3D blocks at recorded step ``index`` (their faces), with the measured points' paths so far.
+
+    Rendered with pyvista off-screen (:mod:`srdda.render3d`), else with matplotlib's 3D axes.
+    """
+    from matplotlib import cm, colors as mcolors
+
+    from .render3d import pyvista_renders, render_blocks
+
     verts = res.array("vertices")
     index = index % len(verts)
-    fig = plt.figure(figsize=(7, 6), layout="constrained")
-    ax = fig.add_subplot(projection="3d")
     values = block_values(res, index, color)
-    coll = plot_solid_blocks(ax, verts[index], res.mesh, values)
-    if values is not None:
-        fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.6)
-    if trails:
-        _trails(ax, res, index)
-    solid_limits(ax, verts.reshape(-1, verts.shape[-1]))
+    if not pyvista_renders():
+        fig = plt.figure(figsize=(7, 6), layout="constrained")
+        ax = fig.add_subplot(projection="3d")
+        coll = plot_solid_blocks(ax, verts[index], res.mesh, values)
+        if values is not None:
+            fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.6)
+        if trails:
+            _trails(ax, res, index)
+        solid_limits(ax, verts.reshape(-1, verts.shape[-1]))
+        ax.set_title(step_title(res, index))
+        return fig
+    mp = history(res, "measured_position")[: index + 1]
+    paths = [(np.stack([mp[:-1, k], mp[1:, k]], axis=1), f"C{k % 10}", 3.0) for k in range(mp.shape[1])] if trails \
+        else []
+    clim = None if values is None else (float(np.min(values)), float(np.max(values)) or 1.0)
+    image = render_blocks(verts[index], res.mesh, values, clim=clim, segments=paths)
+    fig, ax = plt.subplots(figsize=(7, 6), layout="constrained")
+    ax.imshow(image)
+    ax.set_axis_off()
     ax.set_title(step_title(res, index))
+    if values is not None:
+        mappable = cm.ScalarMappable(mcolors.Normalize(*clim), "viridis")
+        fig.colorbar(mappable, ax=ax, label=quantity_label(res, color), shrink=0.6)
     return fig
 
 
@@ -602,6 +676,15 @@ def ledger_series(res: Results) -> dict[str, np.ndarray]:
     return out
 
 
+def ledger_panels(series: Sequence[Mapping[str, np.ndarray]] | Any) -> list[tuple[str, str]]:
+    """The (key, title) of :data:`LEDGER_PANELS` that :func:`fig_energy_ledger` draws for these
+    :func:`ledger_series`: the entries that are not zero in some run (relative to the largest), and the error."""
+    series = list(series)
+    largest = max(float(np.max(np.abs(v), initial=0.0)) for s in series for v in s.values())
+    return [(k, t) for k, t in LEDGER_PANELS
+            if k == "error" or any(np.max(np.abs(s[k]), initial=0.0) > 1e-9 * largest for s in series)]
+
+
 def _si_prefix(largest: float) -> tuple[float, str]:
     """The power of 1000 and its SI prefix that bring ``largest`` into [1, 1000) (n ... G)."""
     exponent = 0 if largest <= 0 else int(np.clip(3 * np.floor(np.log10(largest) / 3), -9, 9))
@@ -618,9 +701,7 @@ def fig_energy_ledger(results: Results | Mapping[str, Results], title: str = "")
     """
     runs = results if isinstance(results, Mapping) else {results.method: results}
     series = {m: ledger_series(r) for m, r in runs.items()}
-    largest = max(float(np.max(np.abs(v), initial=0.0)) for s in series.values() for v in s.values())
-    keep = [(k, t) for k, t in LEDGER_PANELS
-            if k == "error" or any(np.max(np.abs(s[k]), initial=0.0) > 1e-9 * largest for s in series.values())]
+    keep = ledger_panels(series.values())
     ncols = min(3, len(keep))
     nrows = -(-len(keep) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(4.3 * ncols, 2.7 * nrows + 0.6), layout="constrained",
@@ -632,7 +713,7 @@ def fig_energy_ledger(results: Results | Mapping[str, Results], title: str = "")
         for (method, res), style in zip(runs.items(), ("-", "--", ":", "-.") * len(runs)):
             ax.plot(history(res, "time"), series[method][key] / factor, style, lw=0.9, label=method_label(method))
         ax.set_title(panel, fontsize=9)
-        ax.set_ylabel(f"{key} ({prefix}{unit})", fontsize=8)
+        ax.set_ylabel(f"energy ({prefix}{unit})", fontsize=8)
         ax.tick_params(labelsize=8)
         ax.ticklabel_format(axis="y", useOffset=False)
     for ax in axes.flat[len(keep):]:
@@ -645,4 +726,70 @@ def fig_energy_ledger(results: Results | Mapping[str, Results], title: str = "")
                    fontsize="small")
     if title:
         fig.suptitle(title)
+    return fig
+
+
+# -- per-block energies ----------------------------------------------------------------
+BLOCK_ENERGY_WORDS = {"translational": "kinetic, translation ½m|v|²", "rotational": "kinetic, rotation ½ωᵀJω",
+                      "potential": "gravitational, from the initial height −m g·(c − c₀)"}
+MAX_BLOCK_PANELS = 6  # per-block energy figures draw at most this many blocks unless they are named
+
+
+def block_energies(res: Results, arrays: Any) -> dict[str, np.ndarray]:
+    """Each block's energies (n, nb) at every recorded step: the keys of :data:`BLOCK_ENERGY_WORDS`.
+
+    ``arrays`` is the run's :class:`~srdda.model.ModelArrays` (masses, gravity,
+    the block type); the rotational energy uses each block's mass matrix
+    in the recorded configuration (its vertices history), as the ledger's
+    kinetic energy does. Fixed blocks give zeros.
+    """
+    bt = arrays.block_type
+    mass = arrays.block_mass
+    velocity = np.asarray(res.array("velocity"))
+    centroid = np.asarray(res.array("centroid"))
+    vertices = np.asarray(res.array("vertices"))
+    v, w = velocity[..., bt.translation], velocity[..., bt.rotation]
+    translational = 0.5 * mass * np.einsum("nbi,nbi->nb", v, v)
+    rotational = np.empty_like(translational)
+    for i, verts in enumerate(vertices):  # one recorded step at a time (a figure, not the time step)
+        mom = arrays.moments(verts)
+        matrix = bt.mass_matrix(mom.volume, mom.second)[:, bt.rotation, bt.rotation] * (mass / mom.volume)[:, None,
+                                                                                                         None]
+        rotational[i] = 0.5 * np.einsum("bi,bij,bj->b", w[i], matrix, w[i])
+    potential = -mass * np.einsum("nbi,i->nb", centroid - centroid[0], np.asarray(arrays.gravity, dtype=float))
+    fixed = np.asarray(arrays.block_fixed, dtype=bool)
+    out = {"translational": translational, "rotational": rotational, "potential": potential}
+    for values in out.values():
+        values[:, fixed] = 0.0
+    return out
+
+
+def fig_block_energies(res: Results, arrays: Any, blocks: Sequence[int] | None = None) -> Figure:
+    """Per-block energies against time: one panel per block, each on its own scale, a legend per panel.
+
+    ``blocks``: block indices (default: the moving blocks, at most
+    :data:`MAX_BLOCK_PANELS`), so that a large block's energy never flattens a
+    small one's.
+    """
+    energies = block_energies(res, arrays)
+    chosen = (list(np.flatnonzero(~np.asarray(arrays.block_fixed, dtype=bool))[:MAX_BLOCK_PANELS])
+              if blocks is None else list(blocks))
+    if not chosen:
+        raise ValueError("the run has no moving block; name blocks with --block")
+    ncols = min(2, len(chosen))
+    nrows = -(-len(chosen) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(max(7.0, 5.2 * ncols), 3.0 * nrows + 1.2), layout="constrained",
+                             squeeze=False)
+    t = history(res, "time")
+    unit = quantity_unit(res, "energy")
+    for ax, b in zip(axes.flat, chosen):
+        factor, prefix = _si_prefix(max(float(np.max(np.abs(e[:, b]), initial=0.0)) for e in energies.values()))
+        for key, words in BLOCK_ENERGY_WORDS.items():
+            ax.plot(t, energies[key][:, b] / factor, lw=1.0, label=words)
+        ax.plot(t, sum(e[:, b] for e in energies.values()) / factor, "k--", lw=0.8, label="sum of the three")
+        ax.set(title=res.block_names[b], xlabel="time (s)", ylabel=f"energy ({prefix}{unit})")
+    for ax in axes.flat[len(chosen):]:
+        ax.remove()
+    fig.legend(*axes.flat[0].get_legend_handles_labels(), loc="outside upper center", ncols=2, fontsize="small",
+               title=f"{method_label(res.method)}: energy of each block", title_fontsize="medium")
     return fig

@@ -38,6 +38,7 @@ from .integrators.methods import METHODS  # noqa: E402
 from .io.results_store import ResultsStore  # noqa: E402
 from .model import Model  # noqa: E402
 from .results import Result  # noqa: E402
+from .settings import RunSettings  # noqa: E402
 from .simulation import run  # noqa: E402
 from .ensemble.report import paper_report_section  # noqa: E402
 
@@ -72,6 +73,7 @@ class ExampleRun:
     files: dict[str, Path] = field(default_factory=dict)
     errors: list[str] = field(default_factory=list)
     notes: str = ""  # the example's choices where the paper is silent
+    inputs: tuple[list[str], list[list[str]]] | None = None  # the inputs table (header, rows): materials, run
 
 
 # -- figure makers -------------------------------------------------------------------
@@ -106,17 +108,42 @@ def _balance_summary(results: dict[str, Result]) -> str:
     return "; ".join(parts)
 
 
+# One sentence per energy-ledger panel: what the curve is and why it moves (srdda.ledger)
+LEDGER_SENTENCES = {
+    "kinetic": "Kinetic energy: ½ḋᵀMḋ of every block, translation, rotation and straining.",
+    "potential": "Gravity potential of the moving blocks from their initial centroid heights (negative as they "
+                 "fall; fixed blocks excluded).",
+    "elastic": "Strain energy stored in the deforming blocks.",
+    "spring": "Energy stored in springs and penalty supports (fixed points, point springs, springs): the spring "
+              "stretched by the support's penalty. A method that moves points after the solve (DDA1's "
+              "post-adjusted rotation) stretches the support's spring by that move, which stores energy here "
+              "that no force did work for; the ledger books the same amount as put in by the point update "
+              "(the springs' step-force panel, negative), so the two cancel in the balance.",
+    "contact": "Energy stored in the closed contacts' penalty springs.",
+    "work_loads": "Cumulative work of point loads and of the base acceleration's body force.",
+    "work_prescribed": "Cumulative work of the drivers of prescribed motion.",
+    "work_constraints": "Cumulative work of the hinge and pin forces: zero for a hinge kept exactly (SRDDA, "
+                        "DDA0), not for DDA1's post-adjustment.",
+    "dissipated": "Cumulative energy the dashpots took out.",
+    "dissipated_friction": "Cumulative energy friction took out at sliding contacts.",
+    "dissipated_contact": "Cumulative energy the contact penalty took out: DDA's impact loss and springs "
+                          "released while stretched.",
+    "dissipated_springs": "Cumulative energy the springs' step force took out (negative: put in, e.g. by a "
+                          "point update other than the solved displacement, which then shows in the springs' "
+                          "stored energy).",
+    "error": "Balance error E − E₀ − W_in + D: the time scheme's and the linearisation's own loss or gain; "
+             "zero for an exact ledger.",
+}
+
+
 def _common(results: dict[str, Result], model: Model) -> FigureList:
     """Figures every example gets: the energy ledger and the moving blocks' angular velocities per method."""
-    figs = [("Energy ledger per method, one panel per entry on its own scale (J per m of thickness): stored "
-             "energies (the gravity potential is the moving blocks', from their initial centroid heights: "
-             "fixed blocks excluded), the cumulative work that entered (loads, prescribed motion, hinge forces), "
-             "the cumulative energy taken out (dashpots, friction, the contact penalty's impact loss, the "
-             "springs' step force) and the "
-             "balance error E − E₀ − W_in + D (the time scheme's and the linearisation's own loss or gain). "
-             "Entries that stay zero are left out; methods that agree draw on top of each other (solid DDA0, "
-             "dashed DDA1, dotted SRDDA). E₀ is the initial energy above the datum. Largest balance "
-             f"error: {_balance_summary(results)}.", plotting.fig_energy_ledger(results))]
+    drawn = plotting.ledger_panels(plotting.ledger_series(r) for r in results.values())
+    unit = "J per m of thickness" if model.dim == 2 else "J"
+    figs = [(f"Energy ledger per method, one panel per entry on its own scale ({unit}); entries that stay zero "
+             "are left out; methods that agree draw on top of each other (solid DDA0, dashed DDA1, dotted "
+             "SRDDA). " + " ".join(LEDGER_SENTENCES[key] for key, _ in drawn)
+             + f" Largest balance error: {_balance_summary(results)}.", plotting.fig_energy_ledger(results))]
     moving = np.flatnonzero(~model.arrays().block_fixed)
     if 0 < len(moving) <= MAX_OMEGA_BLOCKS:
         figs.append(("Angular velocity ω (rad/s) of every moving block against time: a colour per method, "
@@ -194,8 +221,10 @@ def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = ME
         files: dict[str, Path] = {}
         errors: list[str] = []
         model = None
+        settings_used: dict[str, RunSettings] = {}
         for method in methods:
             model, settings = example.build(method)
+            settings_used[method] = settings
             recorders = []
             if runs_dir is not None:
                 files[method] = Path(runs_dir) / f"{name}_{method}.h5"
@@ -226,11 +255,46 @@ def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = ME
             figures += FIGURES.get(name, _generic)(results, model) + _common(results, model)
         except Exception as exc:
             errors.append(f"figures: {type(exc).__name__}: {exc}")
-        out.append(ExampleRun(name, example.title, results, rows, figures, wall, files, errors, example.notes))
+        out.append(ExampleRun(name, example.title, results, rows, figures, wall, files, errors, example.notes,
+                              inputs_table(model, settings_used) if model is not None else None))
     return out
 
 
 # -- tables ---------------------------------------------------------------------------
+def _si(value: float | None, unit: str) -> str:
+    return "-" if value is None else f"{value:.6g} {unit}".strip()
+
+
+def inputs_table(model: Model, settings: dict[str, RunSettings]) -> tuple[list[str], list[list[str]]]:
+    """The inputs of an example's runs as (header, rows): materials, joints, Δt, steps, penalties, method, solver.
+
+    A setting that differs between the methods' runs lists each method's value.
+    """
+    rows = [[f"material {name}", f"density {_si(m.density, 'kg/m³')}, Young's modulus {_si(m.young, 'Pa')}, "
+             f"Poisson's ratio {m.poisson:g}, plane {m.plane}"] for name, m in model.materials.items()]
+    joints = {"default joint": model.default_joint, **{f"joint {k}": j for k, j in model.joint_materials.items()}}
+    rows += [[name, f"friction angle {j.friction_angle:g}°, cohesion {_si(j.cohesion, 'Pa')}, tensile strength "
+              f"{_si(j.tensile_strength, 'Pa')}"] for name, j in joints.items()]
+
+    def setting(label: str, field: str, unit: str = "") -> None:
+        values = {m: getattr(s, field) for m, s in settings.items()}
+        shown = {m: _si(v, unit) if isinstance(v, float) else "-" if v is None else str(v) for m, v in values.items()}
+        text = (next(iter(shown.values())) if len(set(shown.values())) == 1
+                else ", ".join(f"{plotting.method_label(m)} {v}" for m, v in shown.items()))
+        rows.append([label, text])
+
+    setting("method", "method")
+    setting("time step Δt", "dt", "s")
+    setting("steps", "n_steps")
+    setting("end time", "end_time", "s")
+    setting("penalty (fixed points, constraints)", "penalty", "N/m")
+    setting("contact penalty k_n", "contact_penalty", "N/m")
+    setting("time integration ρ∞", "rho_inf")
+    setting("linear solver", "solver")
+    return ["input", "value (SI)"], rows
+
+
+
 def _decimals(paper: float | None) -> int:
     if isinstance(paper, int):  # a count (e.g. a contact step): ours is a count too
         return -2
@@ -351,6 +415,9 @@ def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str
         if run_.notes:
             md += [run_.notes, ""]
             hb.append(f"<p>{html.escape(run_.notes)}</p>")
+        if run_.inputs is not None:
+            md += ["### Inputs", "", _md_table(*run_.inputs), ""]
+            hb.append(f"<h3>Inputs</h3>{_html_table(*run_.inputs)}")
         header, body = _runs_table(run_)
         md += [_md_table(header, body), ""]
         hb.append(_html_table(header, body))
@@ -365,9 +432,10 @@ def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str
             png = _png(fig)
             name = f"{run_.name}_{i + 1}.png"
             (out / "figures" / name).write_bytes(png)
-            md += [f"![{caption}](figures/{name})", "", f"*{caption}*", ""]
+            md += [f"![{run_.title}, figure {i + 1}](figures/{name})", "", f"*{caption}*", ""]
             data = base64.b64encode(png).decode("ascii")
-            hb.append(f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(caption)}'>"
+            alt = html.escape(f"{run_.title}, figure {i + 1}")
+            hb.append(f"<figure><img src='data:image/png;base64,{data}' alt='{alt}'>"
                       f"<figcaption>{html.escape(caption)}</figcaption></figure>")
     paper_report_section(out, md, hb)  # the probabilistic rockfall of DIR/ensemble, when one was run there
     md_path, html_path = out / "report.md", out / "report.html"

@@ -56,14 +56,19 @@ def bolt_histories(arrays: ModelArrays, state: State) -> dict[str, np.ndarray]:
 BOLT_HISTORIES = ("bolt_force", "bolt_shear_force", "bolt_broken", "bolt_break_time", "bolt_ends")
 _HISTORIES = ("step", "time", "centroid", "area", "rotation", "velocity", "stress", "measured_position",
               "measured_velocity", "energy", "iterations", "multipliers", "closed_contacts", "max_penetration",
-              *BOLT_HISTORIES)
+              *BOLT_HISTORIES, "vertices")
 
 
 @dataclass
 class Result:
     """Recorded histories of a run (rows = recorded steps) and how it ended; the in-memory recorder.
 
-    ``keep_history=False`` keeps the first and the latest recorded step only.
+    ``array(name)`` gives a history as one array: ``centroid`` (n, nb, dim),
+    ``vertices`` (n, nv, dim), ``measured_position`` and ``measured_velocity``
+    (n, nm, dim: the measured points in the order they were added; also
+    :meth:`measured`), ``velocity``, ``stress``, ``energy`` (columns
+    :attr:`energy_names`; also :meth:`energies`), ... ``keep_history=False``
+    keeps the first and the latest recorded step only.
     """
 
     block_names: tuple[str, ...]
@@ -88,16 +93,31 @@ class Result:
     bolt_broken: list[np.ndarray] = field(default_factory=list)  # bool per bolt
     bolt_break_time: list[np.ndarray] = field(default_factory=list)  # s, nan while intact
     bolt_ends: list[np.ndarray] = field(default_factory=list)  # (n_bolts, 2, dim) m
+    vertices: list[np.ndarray] = field(default_factory=list)  # (nv, dim) m: every block's vertices
     bolt_names: tuple[str, ...] = ()
+    keep_vertices: bool = True  # False: no vertices history (a large model's memory)
     status: str = "running"
     final_state: State | None = None
 
     def array(self, name: str) -> np.ndarray:
-        """A history as one array (first axis = recorded step)."""
+        """A history as one array (first axis = recorded step); ``energy`` has the columns :attr:`energy_names`."""
         if name == "energy":
-            keys = self.energy[0].keys() if self.energy else []
-            return np.array([[e[k] for k in keys] for e in self.energy])
+            return np.array([[e[k] for k in self.energy_names] for e in self.energy])
         return np.asarray(getattr(self, name))
+
+    @property
+    def energy_names(self) -> tuple[str, ...]:
+        """The columns of ``array("energy")``: the ledger's entries (srdda.ledger.ENERGY_NAMES)."""
+        return tuple(self.energy[0]) if self.energy else ()
+
+    def energies(self) -> dict[str, np.ndarray]:
+        """Every energy of the ledger as a series (J, J/m in 2D) by name: ``energies()["kinetic"]``."""
+        table = self.array("energy")
+        return {name: table[:, k] for k, name in enumerate(self.energy_names)}
+
+    def measured(self, point: int) -> tuple[np.ndarray, np.ndarray]:
+        """Position and velocity histories (n, dim) of measured point ``point`` (0: the first one added)."""
+        return self.array("measured_position")[:, point], self.array("measured_velocity")[:, point]
 
     @property
     def completed(self) -> bool:
@@ -115,7 +135,8 @@ class Result:
                state.stress.copy(), pos, vel, dict(energy), solves, state.multipliers.copy(),
                0 if contacts is None else int(np.count_nonzero(contacts.closed)),
                0.0 if contacts is None else contacts.max_penetration,
-               *bolt_histories(arrays, state).values())
+               *bolt_histories(arrays, state).values(),
+               state.vertices.copy() if self.keep_vertices else np.zeros((0, arrays.block_type.dim)))
         self.bolt_names = arrays.links.bolt_names
         for name, value in zip(_HISTORIES, row):
             getattr(self, name).append(value)

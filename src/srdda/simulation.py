@@ -34,13 +34,14 @@ class TimeStepWarning(UserWarning):
 
 def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[int], None] | None = None,
         state: State | None = None, recorders: Sequence[Recorder] = (), keep_history: bool = True,
-        stop: Callable[[State], bool] | None = None) -> Result:
+        stop: Callable[[State], bool] | None = None, keep_vertices: bool = True) -> Result:
     """Run ``model`` for ``settings.n_steps`` steps or to ``settings.end_time``; pure (no global state).
 
     Steps are recorded every ``settings.record_every`` steps (and the first and
     last) into the returned :class:`Result` and every extra ``recorders``.
     ``keep_history=False`` keeps only the first and last recorded step in the
-    Result (stream long runs to a :class:`~srdda.io.results_store.ResultsStore`).
+    Result (stream long runs to a :class:`~srdda.io.results_store.ResultsStore`);
+    ``keep_vertices=False`` leaves the vertices out of its histories (large models).
     A run that cannot go on (singular system, non-finite values, Δt below its
     minimum) ends with ``result.status`` saying why. ``stop(state)``, called after every
     accepted step, ends the run (completed, that step recorded) when it returns True.
@@ -48,7 +49,7 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     arrays = model.arrays() if isinstance(model, Model) else model
     stepper = Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance))
     state = state if state is not None else initial_state(arrays, stepper.method)
-    result = Result(arrays.block_names, stepper.method.name, keep_history)
+    result = Result(arrays.block_names, stepper.method.name, keep_history, keep_vertices=keep_vertices)
     sinks: list[Recorder] = [result, *recorders]
 
     def record(state: State, solves: int, energy: dict[str, float]) -> None:

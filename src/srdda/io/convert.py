@@ -13,7 +13,14 @@ from .legacy import read_legacy
 from .modelfile import model_to_dict
 from ..units import UNIT_SYSTEMS
 
-__all__ = ["convert", "read_dda"]
+__all__ = ["convert", "read_dda", "shipped_inputs"]
+
+SHIPPED = Path(__file__).resolve().parent.parent / "data" / "legacy"  # package data: found from any folder
+
+
+def shipped_inputs() -> dict[str, Path]:
+    """The legacy DDA inputs shipped with srdda (``srdda convert --example NAME``): name -> geometry file."""
+    return {p.stem: p for p in sorted(SHIPPED.glob("*.geo"))}
 
 
 def _is_xml(path: Path) -> bool:
@@ -56,7 +63,7 @@ def header_comment(data: DDAInput) -> str:
 
 
 @click.command("convert")
-@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True, dir_okay=False))
+@click.argument("files", nargs=-1, type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), help="The srdda model file to write.")
 @click.option("--domain-type", "domain_types", type=int, multiple=True,
               help="Keep only blocks inside the region enclosed by joints of this type (repeatable); "
@@ -64,11 +71,20 @@ def header_comment(data: DDAInput) -> str:
 @click.option("--units", type=click.Choice(["auto", *UNIT_SYSTEMS]), default="auto", show_default=True,
               help="Units of the input files (converted to SI); auto: from the gravity the files imply "
                    "(9.81 SI, 32.2 ft-lbf-slug, 386 in-lbf).")
-def convert(files: tuple[str, ...], output: str, domain_types: tuple[int, ...], units: str) -> None:
+@click.option("--example", type=click.Choice(list(shipped_inputs())), default=None,
+              help="Convert an input shipped with srdda instead of FILES (a slope in Shi's legacy format, ft units).")
+def convert(files: tuple[str, ...], output: str, domain_types: tuple[int, ...], units: str, example: str | None
+            ) -> None:
     """Convert DDA input files (GEOMETRY [ANALYSIS], legacy text or DDAML) to an srdda model file (SI).
 
     Without ANALYSIS, GEOMETRY's .ana is used, or documented defaults when there is none.
     """
+    if example is not None:
+        if files:
+            raise click.UsageError("give FILES or --example, not both")
+        files = (str(shipped_inputs()[example]),)
+    if not files:
+        raise click.UsageError("give a geometry file (and optionally its analysis file), or --example NAME")
     if len(files) > 2:
         raise click.UsageError("give a geometry file and optionally its analysis file")
     with warnings.catch_warnings(record=True) as caught:

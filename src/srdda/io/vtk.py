@@ -1,30 +1,40 @@
 """ParaView files: VTU meshes per recorded step and PVD time series, written with meshio.
 
-Blocks are VTK polygon cells (one per block, grouped by vertex count as meshio
-needs) with cell data ``block``, ``material``, ``fixed``, ``velocity`` (vx, vy,
-0), ``angular_velocity``, ``strain_rate`` (εx, εy, γxy rates), ``stress`` (σx,
-σy, τxy), ``area`` and ``area_change`` (A/A0 - 1). Contacts are vertex cells
-at the contact point, or line cells from the point to its partner point when
-one is given, with ``normal_force``, ``shear_force``, ``normal`` and any other
-per-contact array. Rock bolts are line cells from end a to end b with
-``axial_force``, ``shear_force``, ``broken`` and ``bolt`` (its index). A step
-without contacts gives a valid empty VTU (written as ASCII: ParaView reads it,
-meshio's reader does not read empty meshes).
+Blocks are VTK polygon cells in 2D, polyhedron cells in 3D (one per block,
+grouped by vertex count as meshio needs) with cell data ``block``,
+``material``, ``fixed``, ``velocity``, ``angular_velocity``, ``strain_rate``,
+``stress``, the derived ``strain`` (compliance · (σ - σ0)) and
+``principal_stress``, ``area``/``volume`` and their change, and point data
+``displacement``. Contacts are vertex cells at the contact point, or line
+cells from the point to its partner point when one is given, with every stored
+per-contact array and the derived ``slip`` and (when not stored)
+``shear_force`` (:func:`contact_fields`). Rock bolts are line cells from end a
+to end b with ``axial_force``, ``shear_force``, ``broken`` and ``bolt`` (its
+index). A step without contacts gives a valid empty VTU (written as ASCII:
+ParaView reads it, meshio's reader does not read empty meshes). The fields and
+their units: docs/results.md, *ParaView*.
 """
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
 import meshio
 import numpy as np
 
+from ..contact.openclose import LOCKED, SLIDING
 from ..geometry.polyhedron import PolyhedronMesh
 from ..kinematics.blocktype import SOLID
+from ..step import contact_parameters, model_half_height
+from .results_reader import open_results
 from .results_store import StoredResult, read_results
 
-__all__ = ["blocks_mesh", "solid_blocks_mesh", "contacts_mesh", "bolts_mesh", "write_pvd", "write_vtu_series"]
+__all__ = ["blocks_mesh", "solid_blocks_mesh", "contacts_mesh", "bolts_mesh", "write_pvd", "write_vtu_series",
+           "default_every", "series_rows", "ModelFields", "model_fields", "block_fields", "contact_fields",
+           "principal_stresses", "MAX_SERIES_FILES"]
 
 
 def _xyz(xy: np.ndarray) -> np.ndarray:
@@ -35,7 +45,7 @@ def _xyz(xy: np.ndarray) -> np.ndarray:
 
 def blocks_mesh(vertices: np.ndarray, block_ptr: np.ndarray, velocity: np.ndarray, stress: np.ndarray,
                 material: np.ndarray, area: np.ndarray, initial_area: np.ndarray,
-                fixed: np.ndarray | None = None) -> meshio.Mesh:
+                fixed: np.ndarray | None = None, extra: Mapping[str, np.ndarray] | None = None) -> meshio.Mesh:
     """All blocks of one step as polygon cells with cell data (see the module docstring).
 
     Cells come grouped by vertex count; the ``block`` cell field gives each
@@ -53,6 +63,7 @@ def blocks_mesh(vertices: np.ndarray, block_ptr: np.ndarray, velocity: np.ndarra
         "stress": stress,
         "area": area,
         "area_change": area / initial_area - 1.0,
+        **(extra or {}),
     }
     return _grouped_mesh(_xyz(vertices), counts, per_block,
                          lambda n, blocks: ("polygon", block_ptr[blocks][:, None] + np.arange(n)[None, :]))
@@ -72,7 +83,8 @@ def _grouped_mesh(points: np.ndarray, counts: np.ndarray, per_block: dict[str, n
 
 def solid_blocks_mesh(vertices: np.ndarray, mesh: PolyhedronMesh, velocity: np.ndarray, stress: np.ndarray,
                       material: np.ndarray, volume: np.ndarray, initial_volume: np.ndarray,
-                      fixed: np.ndarray | None = None) -> meshio.Mesh:
+                      fixed: np.ndarray | None = None, extra: Mapping[str, np.ndarray] | None = None
+                      ) -> meshio.Mesh:
     """All 3D blocks of one step as VTK polyhedron cells (their faces), grouped by vertex count as meshio needs.
 
     Cell data: ``block``, ``material``, ``fixed``, ``velocity`` (vx, vy, vz),
@@ -95,27 +107,30 @@ def solid_blocks_mesh(vertices: np.ndarray, mesh: PolyhedronMesh, velocity: np.n
         "stress": stress,
         "volume": volume,
         "volume_change": volume / initial_volume - 1.0,
+        **(extra or {}),
     }
     return _grouped_mesh(np.asarray(vertices, dtype=float), counts, per_block,
                          lambda n, blocks: (f"polyhedron{n}", [per_block_faces[b] for b in blocks]))
 
 
 def contacts_mesh(contacts: Mapping[str, np.ndarray]) -> meshio.Mesh:
-    """Contacts of one step: ``point`` (n, 2) required, ``point_b`` (n, 2) optional (line cells).
+    """Contacts of one step: ``point`` (n, 2) or (n, 3) required, ``point_b`` (n, dim) optional (line cells).
 
-    Every other array whose first axis has n rows becomes cell data (2-vectors
-    such as ``normal`` are padded to 3D).
+    Every other array whose first axis has n rows becomes cell data; in 2D,
+    2-vectors such as ``normal`` are padded to 3D. 3D contacts keep their
+    (n, 2) arrays (``shear``, ``direction``: components in the contact's frame).
     """
     if "point" not in contacts:
-        raise ValueError("contacts need a 'point' array (n, 2): where each contact is")
-    pa = np.asarray(contacts["point"], dtype=float).reshape(-1, 2)
+        raise ValueError("contacts need a 'point' array (n, 2) or (n, 3): where each contact is")
+    point = np.asarray(contacts["point"], dtype=float)
+    dim = point.shape[-1] if point.ndim == 2 and point.shape[-1] in (2, 3) else 2
+    pa = point.reshape(-1, dim)
     n = len(pa)
     if "point_b" in contacts:
-        pb = np.asarray(contacts["point_b"], dtype=float).reshape(-1, 2)
-        points = _xyz(np.concatenate([pa, pb]))
+        points = np.concatenate([pa, np.asarray(contacts["point_b"], dtype=float).reshape(-1, dim)])
         cells = [("line", np.column_stack([np.arange(n), n + np.arange(n)]))]
     else:
-        points = _xyz(pa)
+        points = pa
         cells = [("vertex", np.arange(n)[:, None])]
     data = {}
     for name, value in contacts.items():
@@ -126,10 +141,10 @@ def contacts_mesh(contacts: Mapping[str, np.ndarray]) -> meshio.Mesh:
             raise ValueError(f"contact array {name!r} has {arr.shape[:1]} rows, expected {n}")
         if arr.dtype == bool:  # VTK has no boolean arrays
             arr = arr.astype(np.uint8)
-        if arr.ndim == 2 and arr.shape[1] == 2:
+        if dim == 2 and arr.ndim == 2 and arr.shape[1] == 2:
             arr = _xyz(arr)
         data[name] = [arr]
-    return meshio.Mesh(points, cells, cell_data=data)
+    return meshio.Mesh(_xyz(points) if dim == 2 else points, cells, cell_data=data)
 
 
 def bolts_mesh(ends: np.ndarray, axial_force: np.ndarray, shear_force: np.ndarray, broken: np.ndarray
@@ -161,40 +176,165 @@ def write_pvd(path: str | Path, files: Sequence[str | Path], times: Sequence[flo
 
 
 ContactSeries = Callable[[int], Mapping[str, np.ndarray] | None]
+MAX_SERIES_FILES = 200  # the default --every keeps each PVD series at or under this many files
 
 
-def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, every: int = 1,
-                     contacts: ContactSeries | None = None, prefix: str = "blocks") -> dict[str, Path]:
+def default_every(n_recorded: int, max_files: int = MAX_SERIES_FILES) -> int:
+    """The smallest step stride that keeps a series of ``n_recorded`` steps (and the last) within ``max_files``."""
+    return max(1, -(-max(n_recorded - 1, 0) // max(max_files - 1, 1)))
+
+
+def series_rows(n_recorded: int, every: int) -> list[int]:
+    """Recorded rows a series writes: every ``every``-th and the last."""
+    return sorted({*range(0, n_recorded, every), n_recorded - 1}) if n_recorded else []
+
+
+@dataclass(frozen=True)
+class ModelFields:
+    """What the derived VTK fields need of the stored model: elastic compliance, initial stress, joints.
+
+    Read from the results file's ``/model`` group (:func:`model_fields`).
+    """
+
+    compliance: np.ndarray  # (nb, k, k): strain = compliance · (σ - σ0), engineering shear strains
+    initial_stress: np.ndarray  # (nb, k)
+    block_material: np.ndarray
+    vertex_block: np.ndarray
+    friction: np.ndarray  # (nj,) friction angle (rad) of each joint material
+    edge_joint: np.ndarray  # (nv,) 2D: joint of the edge starting at each vertex, -1 = by materials
+    face_joint: np.ndarray | None  # (nf,) 3D: joint of each face, -1 = by materials
+    joint_by_materials: np.ndarray
+    shear_stiffness: float  # k_s of the run's contacts (N/m)
+
+
+def model_fields(res: StoredResult) -> ModelFields:
+    """The stored model's arrays the derived fields use, and the run's contact shear stiffness."""
+    with open_results(res.path) as f:
+        g = f["model"]
+        data = {name: g[name][()] for name in ("compliance", "stress", "block_material", "vertex_block",
+                                               "joint_properties", "edge_joint", "joint_by_materials")}
+        face_joint = g["face_joint"][()] if "face_joint" in g else None
+    # contact_parameters reads only the compliance of the model (for an automatic penalty)
+    params = contact_parameters(SimpleNamespace(compliance=data["compliance"]), res.settings,
+                                model_half_height(res.initial_vertices))
+    return ModelFields(data["compliance"], data["stress"], data["block_material"], data["vertex_block"],
+                       data["joint_properties"][:, 0], data["edge_joint"], face_joint, data["joint_by_materials"],
+                       params.shear_stiffness)
+
+
+def principal_stresses(stress: np.ndarray) -> np.ndarray:
+    """Principal stresses (n, 2) in 2D or (n, 3) in 3D, largest first (Pa; tension positive)."""
+    stress = np.asarray(stress, dtype=float)
+    if stress.shape[-1] == 3:
+        sx, sy, txy = stress.T
+        mean, radius = 0.5 * (sx + sy), np.hypot(0.5 * (sx - sy), txy)
+        return np.column_stack([mean + radius, mean - radius])
+    sx, sy, sz, tyz, tzx, txy = stress.T
+    tensor = np.stack([np.stack([sx, txy, tzx], -1), np.stack([txy, sy, tyz], -1), np.stack([tzx, tyz, sz], -1)],
+                      axis=-2)
+    return np.linalg.eigvalsh(tensor)[:, ::-1]
+
+
+def block_fields(stress: np.ndarray, fields: ModelFields) -> dict[str, np.ndarray]:
+    """Per-block strain since the start (compliance · (σ - σ0); engineering shear strains) and principal stresses."""
+    strain = np.einsum("bij,bj->bi", fields.compliance, np.asarray(stress) - fields.initial_stress)
+    return {"strain": strain, "principal_stress": principal_stresses(stress)}
+
+
+def contact_fields(contacts: Mapping[str, np.ndarray], fields: ModelFields) -> dict[str, np.ndarray]:
+    """The stored contact arrays plus ``slip`` (1: sliding) and, when not stored, ``shear_force``.
+
+    The shear force is computed from the stored ``state``, ``normal_force`` and
+    ``shear``: k_s·|s| for a locked contact (s its shear spring's
+    displacement), tan φ·N for a sliding one (Coulomb, φ of its joint; the
+    cohesion of a still-bonded sliding contact is not included), 0 for an open
+    one. A file that lacks one of those arrays gets no computed shear force.
+    """
+    out = dict(contacts)
+    if "state" not in contacts:
+        return out
+    state = np.asarray(contacts["state"])
+    out["slip"] = (state == SLIDING).astype(np.uint8)
+    if "shear_force" in contacts or "normal_force" not in contacts or "shear" not in contacts:
+        return out
+    joint = _contact_joints(contacts, fields)
+    if joint is None:
+        return out
+    shear = np.asarray(contacts["shear"], dtype=float)
+    magnitude = np.abs(shear) if shear.ndim == 1 else np.linalg.norm(shear, axis=1)
+    coulomb = np.tan(fields.friction[joint]) * np.asarray(contacts["normal_force"], dtype=float)
+    out["shear_force"] = np.select([state == LOCKED, state == SLIDING], [fields.shear_stiffness * magnitude, coulomb],
+                                   0.0)
+    return out
+
+
+def _contact_joints(contacts: Mapping[str, np.ndarray], fields: ModelFields) -> np.ndarray | None:
+    """Row of the joint properties of every contact as the contact term picks it (None: not stored enough).
+
+    2D: the contacted edge's joint, else the one of the two blocks' materials.
+    3D: a vertex-face contact takes its face's joint, every other one that of the materials.
+    """
+    mat = fields.block_material
+    if "vertex" in contacts and "edge" in contacts:
+        vertex, edge = (np.asarray(contacts[k], dtype=np.int64) for k in ("vertex", "edge"))
+        named = fields.edge_joint[edge]
+        by_materials = fields.joint_by_materials[mat[fields.vertex_block[vertex]], mat[fields.vertex_block[edge]]]
+        return np.where(named >= 0, named, by_materials)
+    if "block_a" in contacts and "block_b" in contacts:
+        by_materials = fields.joint_by_materials[mat[np.asarray(contacts["block_a"], dtype=np.int64)],
+                                                 mat[np.asarray(contacts["block_b"], dtype=np.int64)]]
+        if fields.face_joint is None or "kind" not in contacts or "feature_b" not in contacts:
+            return by_materials
+        face = np.asarray(contacts["feature_b"], dtype=np.int64)
+        vertex_face = (np.asarray(contacts["kind"]) == 0) & (face >= 0) & (face < len(fields.face_joint))
+        named = np.where(vertex_face, fields.face_joint[np.where(vertex_face, face, 0)], -1)
+        return np.where(named >= 0, named, by_materials)
+    return None
+
+
+def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, every: int | None = None,
+                     contacts: ContactSeries | None = None, prefix: str = "blocks",
+                     progress: Callable[[], None] | None = None) -> dict[str, Path]:
     """VTU files of every ``every``-th recorded step (and the last) of a results file, and PVD collections.
 
-    ``contacts(i)`` may give the contact arrays of recorded step ``i``; by
-    default the contacts stored in the results file are used (at the steps
-    they were recorded). Returns the PVD paths (``blocks``, and ``contacts``
-    when there are any, ``bolts`` for a model with rock bolts).
+    ``every`` None: :func:`default_every` (each series at most
+    :data:`MAX_SERIES_FILES` files). ``contacts(i)`` may give the contact
+    arrays of recorded step ``i``; by default the contacts stored in the
+    results file are used (at the steps they were recorded), with the derived
+    fields of :func:`contact_fields`. Blocks carry the derived fields of
+    :func:`block_fields` and a point field ``displacement`` (from the initial
+    vertices). ``progress()`` is called after each step written. Returns the
+    PVD paths (``blocks``, and ``contacts`` when there are any, ``bolts`` for
+    a model with rock bolts).
     """
     res = results if isinstance(results, StoredResult) else read_results(results)
+    every = default_every(len(res.step)) if every is None else every
     if every < 1:
         raise ValueError(f"every must be >= 1, got {every}")
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
+    fields = model_fields(res)
     if contacts is None and res.contacts:
         index = {int(s): i for i, s in enumerate(res.contacts["step"])}
         def contacts(i: int) -> Mapping[str, np.ndarray] | None:  # noqa: E306 - the stored contacts
             j = index.get(int(res.step[i]))
-            return None if j is None else res.contacts_at(j)
+            return None if j is None else contact_fields(res.contacts_at(j), fields)
     area0 = res.area[0]
     solids = res.mesh
     block_files, contact_files, block_times, contact_times = [], [], [], []
     bolt_files = []
     has_bolts = "bolt_ends" in res.histories and res.bolt_ends.shape[1] > 0
-    for i in sorted({*range(0, len(res.step), every), len(res.step) - 1}):
+    for i in series_rows(len(res.step), every):
         name = f"{prefix}_{int(res.step[i]):07d}.vtu"
+        extra = block_fields(res.stress[i], fields)
         if solids is not None:
             mesh = solid_blocks_mesh(res.vertices[i], solids, res.velocity[i], res.stress[i], res.block_material,
-                                     res.area[i], area0, res.block_fixed)
+                                     res.area[i], area0, res.block_fixed, extra)
         else:
             mesh = blocks_mesh(res.vertices[i], res.block_ptr, res.velocity[i], res.stress[i], res.block_material,
-                               res.area[i], area0, res.block_fixed)
+                               res.area[i], area0, res.block_fixed, extra)
+        displacement = np.asarray(res.vertices[i], dtype=float) - res.initial_vertices
+        mesh.point_data["displacement"] = _xyz(displacement) if displacement.shape[-1] == 2 else displacement
         _write(mesh, out / name)
         block_files.append(name)
         block_times.append(res.time[i])
@@ -209,6 +349,8 @@ def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, 
             _write(contacts_mesh(c), out / cname)
             contact_files.append(cname)
             contact_times.append(res.time[i])
+        if progress is not None:
+            progress()
     pvds = {"blocks": write_pvd(out / f"{prefix}.pvd", block_files, block_times)}
     if contact_files:
         pvds["contacts"] = write_pvd(out / "contacts.pvd", contact_files, contact_times)

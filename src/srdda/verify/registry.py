@@ -24,7 +24,8 @@ from typing import Any
 
 from ..integrators.methods import METHODS
 
-__all__ = ["Case", "CASES", "Row", "case", "row", "run_case", "UnknownCaseError"]
+__all__ = ["Case", "CASES", "Row", "case", "row", "run_case", "UnknownCaseError", "expected_seconds",
+           "EXPECTED_SECONDS"]
 
 Row = dict[str, Any]
 CaseFunction = Callable[[tuple[str, ...], bool], list[Row]]
@@ -95,3 +96,39 @@ def run_case(name: str, quick: bool = False, methods: Sequence[str] | None = Non
     c = get_case(name)
     chosen = c.methods if methods is None else tuple(m for m in c.methods if m in methods)
     return c.run(chosen, quick and c.quick)
+
+
+# Wall seconds of each case on the reference machine (the project's 2 shared cores, 2026-11-26, one
+# `srdda verify --quick` and the quick cases alone without it), (with --quick, without): the estimate that
+# `srdda verify`'s progress bar scales by this machine's speed. A case missing here (a new one) counts
+# as the median of the others.
+EXPECTED_SECONDS: dict[str, tuple[float, float]] = {
+    "free-spin-2d": (3.0, 14.4),
+    "free-fall-2d": (2.9, 15.9),
+    "incline-2d": (17.5, 17.5),
+    "pendulum-2d": (54.2, 54.2),
+    "spring-mass-2d": (8.2, 8.2),
+    "hinge-gap-2d": (5.1, 5.1),
+    "uniaxial-2d": (0.4, 0.4),
+    "spin-3d": (3.9, 18.2),
+    "intermediate-axis-3d": (58.8, 58.8),
+    "extruded-rod-3d": (35.9, 35.9),
+    "extruded-pendulum-3d": (24.2, 24.2),
+    "conical-pendulum-3d": (28.7, 28.7),
+    "uniaxial-3d": (0.2, 0.2),
+    "newmark": (33.2, 33.2),
+    "bolted-block": (12.2, 12.2),
+    "incline-3d": (26.2, 26.2),
+    "drop-3d": (7.4, 7.4),
+    "extruded-incline-3d": (42.1, 42.1),
+    "slide-topple-3d": (33.6, 33.6),
+    "wedge-3d": (43.2, 43.2),
+}
+
+
+def expected_seconds(name: str, quick: bool) -> float:
+    """The wall seconds the case ``name`` took on the reference machine (:data:`EXPECTED_SECONDS`)."""
+    if name in EXPECTED_SECONDS:
+        return EXPECTED_SECONDS[name][0 if quick else 1]
+    known = sorted(t[0 if quick else 1] for t in EXPECTED_SECONDS.values())
+    return known[len(known) // 2] if known else 1.0
