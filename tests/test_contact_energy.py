@@ -99,7 +99,8 @@ def _carried(step, state, direction, reference, bonded, normal_force, shear):
     column = lambda values: np.asarray(values, dtype=float)[:, None]  # noqa: E731
     return ContactSet(r.key, r.features, r.block_a, r.block_b, np.asarray(state, dtype=np.int8), column(direction),
                       column(reference), np.asarray(bonded), np.asarray(normal_force, dtype=float),
-                      np.zeros(len(r)), column(shear), r.point_a, r.point_b, r.normal, 0.0)
+                      np.zeros((len(r), 1)), np.zeros(len(r)), column(shear), r.joint, r.point_a, r.point_b, r.normal,
+                      0.0)
 
 
 def test_contact_transfer_keeps_reference_state_and_bond():

@@ -112,8 +112,10 @@ class ContactSet:
     reference: np.ndarray  # (n, k) the shear spring's reference (record.start_reference's coordinates)
     bonded: np.ndarray  # (n,) cohesion and tensile strength still act
     normal_force: np.ndarray  # (n,) N (compression positive)
+    shear_force: np.ndarray  # (n, k) N: the shear force on block a in the frame (spring or friction; 0 open)
     gap: np.ndarray  # (n,) end-of-step normal gap (negative: penetration)
     shear: np.ndarray  # (n, k) end-of-step shear spring stretch (locked); the step's slip (sliding)
+    joint: np.ndarray  # (n,) row of the model's joint table
     point: np.ndarray  # (n, dim) contact point x_a at the start of the step
     point_b: np.ndarray  # (n, dim) its foot x_b on block b
     normal: np.ndarray  # (n, dim) contact normal (outward from b)
@@ -126,7 +128,7 @@ class ContactSet:
         k, dim, fields = record.frame_width, record.point_a.shape[1], record.features.shape[1]
         shear, point = np.empty((0, k)), np.empty((0, dim))
         return ContactSet(i, np.empty((0, fields), dtype=np.int64), i, i, i.astype(np.int8), shear, shear,
-                          i.astype(bool), f, f, shear, point, point, point, 0.0)
+                          i.astype(bool), f, shear, f, shear, i, point, point, point, 0.0)
 
     @property
     def closed(self) -> np.ndarray:
@@ -346,13 +348,15 @@ class ContactStep:
         """
         energy = self.stored_energy()
         self.state = np.where(self._held_in_band(), OPEN, self.state).astype(np.int8)
-        locked = self.state == LOCKED
-        slip = np.where((self.state == SLIDING)[:, None], self.shear - self.shear0, 0.0)  # for the next start
+        locked, sliding = (self.state == LOCKED)[:, None], (self.state == SLIDING)[:, None]
+        slip = np.where(sliding, self.shear - self.shear0, 0.0)  # for the next step's start
+        spring = -self.response.shear_stiffness[:, None] * self.shear
         r = self.record
         return ContactSet(r.key, r.features, r.block_a, r.block_b, self.state.copy(),
                           np.where(self.dragged[:, None], self.trial, self.direction), self.reference.copy(),
-                          self.law.keeps_bond(self.bonded, self.state), self.normal_force.copy(), self.gap.copy(),
-                          np.where(locked[:, None], self.shear, slip), r.point_a, r.point_b, r.normal, energy)
+                          self.law.keeps_bond(self.bonded, self.state), self.normal_force.copy(),
+                          np.where(locked, spring, np.where(sliding, self.applied, 0.0)), self.gap.copy(),
+                          np.where(locked, self.shear, slip), r.joint, r.point_a, r.point_b, r.normal, energy)
 
     @property
     def max_penetration(self) -> float:

@@ -30,7 +30,7 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "ResultsFileError", "StoredResult", "read
            "model_arrays_from_file", "open_results", "group_length", "contact_records"]
 
 FORMAT = "srdda-results"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: one contact set for 2D and 3D, the joint table (1: srdda 0.1.0)
 
 
 class ResultsFileError(ValueError):

@@ -7,8 +7,8 @@ grouped by vertex count as meshio needs) with cell data ``block``,
 ``principal_stress``, ``area``/``volume`` and their change, and point data
 ``displacement``. Contacts are vertex cells at the contact point, or line
 cells from the point to its partner point when one is given, with every stored
-per-contact array and the derived ``slip`` and (when not stored)
-``shear_force`` (:func:`contact_fields`). Rock bolts are line cells from end a
+per-contact array, the derived ``slip`` and the size of the shear force
+(:func:`contact_fields`). Rock bolts are line cells from end a
 to end b with ``axial_force``, ``shear_force``, ``broken`` and ``bolt`` (its
 index). A step without contacts gives a valid empty VTU (written as ASCII:
 ParaView reads it, meshio's reader does not read empty meshes). The fields and
@@ -20,15 +20,13 @@ import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import SimpleNamespace
 
 import meshio
 import numpy as np
 
-from ..contact.openclose import LOCKED, SLIDING
+from ..contact.openclose import SLIDING
 from ..geometry.polyhedron import PolyhedronMesh
 from ..kinematics.blocktype import SOLID
-from ..step import contact_parameters, model_half_height
 from .results_reader import open_results
 from .results_store import StoredResult, read_results
 
@@ -191,35 +189,16 @@ def series_rows(n_recorded: int, every: int) -> list[int]:
 
 @dataclass(frozen=True)
 class ModelFields:
-    """What the derived VTK fields need of the stored model: elastic compliance, initial stress, joints.
-
-    Read from the results file's ``/model`` group (:func:`model_fields`).
-    """
+    """What the derived block fields need of the stored model (read from the results file's ``/model``)."""
 
     compliance: np.ndarray  # (nb, k, k): strain = compliance · (σ - σ0), engineering shear strains
     initial_stress: np.ndarray  # (nb, k)
-    block_material: np.ndarray
-    vertex_block: np.ndarray
-    friction: np.ndarray  # (nj,) friction angle (rad) of each joint material
-    edge_joint: np.ndarray  # (nv,) 2D: joint of the edge starting at each vertex, -1 = by materials
-    face_joint: np.ndarray | None  # (nf,) 3D: joint of each face, -1 = by materials
-    joint_by_materials: np.ndarray
-    shear_stiffness: float  # k_s of the run's contacts (N/m)
 
 
 def model_fields(res: StoredResult) -> ModelFields:
-    """The stored model's arrays the derived fields use, and the run's contact shear stiffness."""
+    """The stored model's compliance and initial stresses."""
     with open_results(res.path) as f:
-        g = f["model"]
-        data = {name: g[name][()] for name in ("compliance", "stress", "block_material", "vertex_block",
-                                               "joint_properties", "edge_joint", "joint_by_materials")}
-        face_joint = g["face_joint"][()] if "face_joint" in g else None
-    # contact_parameters reads only the compliance of the model (for an automatic penalty)
-    params = contact_parameters(SimpleNamespace(compliance=data["compliance"]), res.settings,
-                                model_half_height(res.initial_vertices))
-    return ModelFields(data["compliance"], data["stress"], data["block_material"], data["vertex_block"],
-                       data["joint_properties"][:, 0], data["edge_joint"], face_joint, data["joint_by_materials"],
-                       params.shear_stiffness)
+        return ModelFields(f["model"]["compliance"][()], f["model"]["stress"][()])
 
 
 def principal_stresses(stress: np.ndarray) -> np.ndarray:
@@ -241,55 +220,20 @@ def block_fields(stress: np.ndarray, fields: ModelFields) -> dict[str, np.ndarra
     return {"strain": strain, "principal_stress": principal_stresses(stress)}
 
 
-def contact_fields(contacts: Mapping[str, np.ndarray], fields: ModelFields) -> dict[str, np.ndarray]:
-    """The stored contact arrays plus ``slip`` (1: sliding) and, when not stored, ``shear_force``.
+def contact_fields(contacts: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The stored contact arrays plus ``slip`` (1: sliding) and ``shear_force`` as its size (N).
 
-    The shear force is computed from the stored ``state``, ``normal_force`` and
-    ``shear``: k_s·|s| for a locked contact (s its shear spring's
-    displacement), tan φ·N for a sliding one (Coulomb, φ of its joint; the
-    cohesion of a still-bonded sliding contact is not included), 0 for an open
-    one. A file that lacks one of those arrays gets no computed shear force.
+    The contact set stores the shear force on block a in the contact's frame
+    (the locked spring's force, or the friction that acted); files written
+    before it did (format 1) get no shear force.
     """
     out = dict(contacts)
-    if "state" not in contacts:
-        return out
-    state = np.asarray(contacts["state"])
-    out["slip"] = (state == SLIDING).astype(np.uint8)
-    if "shear_force" in contacts or "normal_force" not in contacts or "shear" not in contacts:
-        return out
-    joint = _contact_joints(contacts, fields)
-    if joint is None:
-        return out
-    shear = np.asarray(contacts["shear"], dtype=float)
-    magnitude = np.abs(shear) if shear.ndim == 1 else np.linalg.norm(shear, axis=1)
-    coulomb = np.tan(fields.friction[joint]) * np.asarray(contacts["normal_force"], dtype=float)
-    out["shear_force"] = np.select([state == LOCKED, state == SLIDING], [fields.shear_stiffness * magnitude, coulomb],
-                                   0.0)
+    if "state" in contacts:
+        out["slip"] = (np.asarray(contacts["state"]) == SLIDING).astype(np.uint8)
+    if "shear_force" in contacts:
+        force = np.asarray(contacts["shear_force"], dtype=float)
+        out["shear_force"] = np.linalg.norm(force.reshape(len(force), -1), axis=1)
     return out
-
-
-def _contact_joints(contacts: Mapping[str, np.ndarray], fields: ModelFields) -> np.ndarray | None:
-    """Row of the joint properties of every contact as the contact term picks it (None: not stored enough).
-
-    2D: the contacted edge's joint, else the one of the two blocks' materials.
-    3D: a vertex-face contact takes its face's joint, every other one that of the materials.
-    """
-    mat = fields.block_material
-    if "vertex" in contacts and "edge" in contacts:
-        vertex, edge = (np.asarray(contacts[k], dtype=np.int64) for k in ("vertex", "edge"))
-        named = fields.edge_joint[edge]
-        by_materials = fields.joint_by_materials[mat[fields.vertex_block[vertex]], mat[fields.vertex_block[edge]]]
-        return np.where(named >= 0, named, by_materials)
-    if "block_a" in contacts and "block_b" in contacts:
-        by_materials = fields.joint_by_materials[mat[np.asarray(contacts["block_a"], dtype=np.int64)],
-                                                 mat[np.asarray(contacts["block_b"], dtype=np.int64)]]
-        if fields.face_joint is None or "kind" not in contacts or "feature_b" not in contacts:
-            return by_materials
-        face = np.asarray(contacts["feature_b"], dtype=np.int64)
-        vertex_face = (np.asarray(contacts["kind"]) == 0) & (face >= 0) & (face < len(fields.face_joint))
-        named = np.where(vertex_face, fields.face_joint[np.where(vertex_face, face, 0)], -1)
-        return np.where(named >= 0, named, by_materials)
-    return None
 
 
 def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, every: int | None = None,
@@ -318,7 +262,7 @@ def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, 
         index = {int(s): i for i, s in enumerate(res.contacts["step"])}
         def contacts(i: int) -> Mapping[str, np.ndarray] | None:  # noqa: E306 - the stored contacts
             j = index.get(int(res.step[i]))
-            return None if j is None else contact_fields(res.contacts_at(j), fields)
+            return None if j is None else contact_fields(res.contacts_at(j))
     area0 = res.area[0]
     solids = res.mesh
     block_files, contact_files, block_times, contact_times = [], [], [], []
