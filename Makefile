@@ -25,6 +25,7 @@ run: install
 	$(BIN)/srdda paper all --method all --report $(REPORT)
 
 test: install-test
+	$(BIN)/mypy
 	$(BIN)/python -m pytest -q
 
 bench: install-test

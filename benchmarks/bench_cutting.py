@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from srdda.geometry.cutting import cut_blocks
-from srdda.geometry.jointsets import JointSet, joint_traces
+from srdda.geometry.cutting2d import cut_blocks
+from srdda.geometry.jointsets2d import JointSet, joint_traces
 from srdda.io.ddaml import read_ddaml
 
 SLOPE = np.array([(0, -5), (60, -5), (60, 20), (35, 20), (15, 0), (0, 0)], dtype=float)

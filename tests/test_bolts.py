@@ -99,11 +99,12 @@ def test_a_broken_bolt_survives_a_checkpoint_and_the_resumed_run_equals_the_whol
     path = tmp_path / "bolt.h5"
     run(arrays, dataclasses.replace(settings, n_steps=80), recorders=[ResultsStore(path, settings, flush_every=10)])
     state = load_checkpoint(path, arrays)
-    assert state.step == 80 and state.bolt_broken.all()
-    assert state.bolt_break_time[0] == whole.final_state.bolt_break_time[0]
+    bolts, whole_bolts = state.carried["bolts"], whole.final_state.carried["bolts"]  # the bolt term's state
+    assert state.step == 80 and bolts.broken.all()
+    assert bolts.break_time[0] == whole_bolts.break_time[0]
     rest = run(arrays, dataclasses.replace(settings, n_steps=40), state=state)
     np.testing.assert_array_equal(rest.final_state.vertices, whole.final_state.vertices)  # a pure function
-    np.testing.assert_array_equal(rest.final_state.bolt_broken, whole.final_state.bolt_broken)
+    np.testing.assert_array_equal(rest.final_state.carried["bolts"].broken, whole_bolts.broken)
     stored = read_results(path)
     assert stored.bolt_names == ("b1",)
     assert stored.bolt_force.shape == (81, 1) and stored.bolt_ends.shape == (81, 1, 2, 2)

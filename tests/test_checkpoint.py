@@ -6,6 +6,7 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+import pytest
 
 import srdda
 from srdda.io.checkpoint import append_checkpoint, checkpoint_count, read_checkpoint, truncate_checkpoints
@@ -93,6 +94,49 @@ def test_a_checkpoint_cut_short_is_not_counted(tmp_path: Path) -> None:
         truncate_checkpoints(g, 1)
         append_checkpoint(g, states[2])
         _equal(states[2], read_checkpoint(g, 1, two_block_model().arrays().moments))
+
+
+def test_what_terms_carry_round_trips_with_names_that_come_and_go(tmp_path: Path) -> None:
+    # State.carried maps term names to dataclasses: a name may appear at a later checkpoint (contacts found
+    # only once blocks touch) and leave again; every checkpoint reads back its own entries, also after
+    # truncation drops the last ones
+    base = _states(6)
+    rng = np.random.default_rng(1)
+
+    def fake(n):
+        return FakeContacts(rng.integers(0, 4, n), rng.integers(4, 9, n), rng.integers(0, 3, n).astype(np.int8),
+                            rng.normal(size=n), float(n))
+
+    carried = [{}, {"a": fake(2)}, {"a": fake(0), "b": fake(3)}, {"b": fake(1)}, {}, {"c": fake(4), "a": fake(1)}]
+    states = [State(**{f: getattr(s, f) for f in ("step", "time", "vertices", "points", "velocity", "acceleration",
+                                                  "stress", "rotation", "moments")}, carried=c)
+              for s, c in zip(base, carried)]
+    arrays = two_block_model().arrays()
+    with h5py.File(tmp_path / "c.h5", "w") as f:
+        g = f.create_group("checkpoint")
+        for s in states[:4]:
+            append_checkpoint(g, s)
+        truncate_checkpoints(g, 3)
+        for s in states[4:]:
+            append_checkpoint(g, s)
+        for i, want in enumerate([*states[:3], *states[4:]]):
+            got = read_checkpoint(g, i, arrays.moments)
+            assert set(got.carried) == set(want.carried), i
+            for name, value in want.carried.items():
+                np.testing.assert_array_equal(got.carried[name].key, value.key)
+                np.testing.assert_array_equal(got.carried[name].normal_force, value.normal_force)
+                assert got.carried[name].energy == value.energy
+
+
+def test_a_checkpoint_of_a_field_this_state_lacks_is_refused(tmp_path: Path) -> None:
+    # a checkpoint written with contacts on the State itself (srdda 0.1.0) would resume without them: refused,
+    # with a message naming the field, rather than a run that silently lost its contacts
+    with h5py.File(tmp_path / "c.h5", "w") as f:
+        g = f.create_group("checkpoint")
+        append_checkpoint(g, _states(2)[1])
+        g.attrs["state_class"] = "srdda.state:State"
+        with pytest.raises(ValueError, match="contacts"):
+            read_checkpoint(g, 0, two_block_model().arrays().moments)
 
 
 def test_contact_sets_on_the_state_are_recorded_by_default(tmp_path: Path) -> None:

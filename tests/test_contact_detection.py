@@ -8,7 +8,7 @@ from srdda.contact import ContactModel, ContactParameters
 from srdda.contact.broadphase2d import candidate_pairs_2d as candidate_pairs
 from srdda.contact.candidates import block_boxes
 from srdda.contact.narrowphase2d import VERTEX_EDGE, VERTEX_VERTEX
-from srdda.contact.transfer import match_previous
+from srdda.contact.record import match_previous
 
 D0 = 0.05
 

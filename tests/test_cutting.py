@@ -9,8 +9,8 @@ import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from srdda.geometry.cutting import NO_JOINT, CuttingError, cut_blocks
-from srdda.geometry.jointsets import JointSet, circular_opening, joint_traces
+from srdda.geometry.cutting2d import NO_JOINT, CuttingError, cut_blocks
+from srdda.geometry.jointsets2d import JointSet, circular_opening, joint_traces
 
 SQUARE = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
 
@@ -277,7 +277,7 @@ def test_generated_joint_sets_tile_a_slope_with_a_tunnel(dips, spacing, trace, b
 
 
 def test_joint_set_and_opening_inputs_are_checked():
-    from srdda.geometry.jointsets import polygonal_opening
+    from srdda.geometry.jointsets2d import polygonal_opening
 
     with pytest.raises(CuttingError, match="spacing"):
         JointSet(dip=10.0, spacing=0.0)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from srdda.geometry.cutting import NO_JOINT, CuttingError
+from srdda.geometry.cutting2d import NO_JOINT, CuttingError
 from srdda.geometry.cutting3d import convex_hull_polyhedron, cut_polyhedra
 from srdda.geometry.jointsets3d import (JointPlanes, JointSet3D, dip_and_direction, fisher_directions,
                                         joint_planes, plane_normal)

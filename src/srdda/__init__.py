@@ -24,8 +24,8 @@ from .simulation import run
 from .state import State
 from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume
-from .geometry.cutting import BlockCut, CuttingError, cut_blocks
-from .geometry.jointsets import JointSet, circular_opening, joint_traces, polygonal_opening
+from .geometry.cutting2d import BlockCut, CuttingError, cut_blocks
+from .geometry.jointsets2d import JointSet, circular_opening, joint_traces, polygonal_opening
 from .cutmodel import add_cut_blocks, add_cut_polyhedra
 from .geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
 from .geometry.jointsets3d import JointPlanes, JointSet3D, joint_planes

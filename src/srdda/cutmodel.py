@@ -1,4 +1,4 @@
-"""Cut blocks added to a :class:`~srdda.model.Model`: 2D (:class:`~srdda.geometry.cutting.BlockCut`) and 3D
+"""Cut blocks added to a :class:`~srdda.model.Model`: 2D (:class:`~srdda.geometry.cutting2d.BlockCut`) and 3D
 (:class:`~srdda.geometry.cutting3d.PolyhedralCut`)."""
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from .geometry.cutting import NO_JOINT, BlockCut
+from .geometry.cutting2d import NO_JOINT, BlockCut
 from .geometry.cutting3d import PolyhedralCut
 from .model import Model, ModelError
 

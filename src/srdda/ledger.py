@@ -40,15 +40,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .term import ENERGY_KINDS, LEDGER, Term
+from .energy_names import ENERGY_KINDS, ENERGY_NAMES, LEDGER
 
 if TYPE_CHECKING:
     from .model import ModelArrays
     from .state import State
+    from .term import Term
 
 __all__ = ["ENERGY_NAMES", "energies", "EnergyWatch", "CREATION_TOLERANCE"]
-
-ENERGY_NAMES = (*ENERGY_KINDS, "total", *LEDGER, "balance")
 
 
 def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[str, float]:

@@ -21,7 +21,7 @@ from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_p
                                   PolyhedronError, box, polyhedron_covers, polyhedron_moments, prism)
 from .kinematics.blocktype import PLANE, SOLID, BlockType, block_type_of_dimension
 from .kinematics.shape3d import elasticity_matrix_3d
-from .kinematics.update import rotate_symmetric_components
+from .kinematics.update2d import rotate_symmetric_components
 from .kinematics.update3d import rotate_symmetric_components_3d
 
 __all__ = ["JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]

@@ -15,7 +15,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .constraints.bolts import bolt_forces
+from .constraints.bolts import bolt_forces, bolt_state
 from .model import ModelArrays
 from .state import State
 
@@ -48,9 +48,9 @@ def bolt_histories(arrays: ModelArrays, state: State) -> dict[str, np.ndarray]:
         return {"bolt_force": empty, "bolt_shear_force": empty, "bolt_broken": np.zeros(0, dtype=bool),
                 "bolt_break_time": empty, "bolt_ends": np.stack([no_end, no_end], axis=1)}
     bolts = bolt_forces(links, state)
-    times = state.bolt_break_time if len(state.bolt_break_time) == links.n_bolts else np.full(links.n_bolts, np.nan)
     return {"bolt_force": bolts.axial, "bolt_shear_force": bolts.shear, "bolt_broken": ~bolts.intact,
-            "bolt_break_time": np.array(times, dtype=float), "bolt_ends": np.stack([bolts.end_a, bolts.end_b], axis=1)}
+            "bolt_break_time": np.array(bolt_state(links, state).break_time, dtype=float),
+            "bolt_ends": np.stack([bolts.end_a, bolts.end_b], axis=1)}
 
 
 BOLT_HISTORIES = ("bolt_force", "bolt_shear_force", "bolt_broken", "bolt_break_time", "bolt_ends")

@@ -14,12 +14,14 @@ from contextlib import contextmanager
 from dataclasses import replace
 
 from .ledger import EnergyWatch, energies
+from .contact.law import ContactLaw
 from .model import Model, ModelArrays
 from .results import Recorder, Result
 from .settings import RunSettings
 from .solvers import blas_threads_for_steps, get_solver
 from .state import State, initial_state
-from .step import Stepper, time_step_advice
+from .step import Stepper, default_terms, time_step_advice
+from .term import Term
 
 __all__ = ["run", "EnergyWarning", "TimeStepWarning"]
 
@@ -34,7 +36,8 @@ class TimeStepWarning(UserWarning):
 
 def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[int], None] | None = None,
         state: State | None = None, recorders: Sequence[Recorder] = (), keep_history: bool = True,
-        stop: Callable[[State], bool] | None = None, keep_vertices: bool = True) -> Result:
+        stop: Callable[[State], bool] | None = None, keep_vertices: bool = True,
+        extra_terms: Sequence[Term] = (), contact_law: ContactLaw | None = None) -> Result:
     """Run ``model`` for ``settings.n_steps`` steps or to ``settings.end_time``; pure (no global state).
 
     Steps are recorded every ``settings.record_every`` steps (and the first and
@@ -43,11 +46,15 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     Result (stream long runs to a :class:`~srdda.io.results_store.ResultsStore`);
     ``keep_vertices=False`` leaves the vertices out of its histories (large models).
     A run that cannot go on (singular system, non-finite values, Δt below its
-    minimum) ends with ``result.status`` saying why. ``stop(state)``, called after every
+    minimum) ends with ``result.status`` saying why. ``extra_terms`` join the
+    step after the default ones (:func:`srdda.step.default_terms`; a term's
+    carried state lives in ``State.carried[term.name]``); ``contact_law``
+    replaces the joints' Mohr-Coulomb law (docs/architecture.md). ``stop(state)``, called after every
     accepted step, ends the run (completed, that step recorded) when it returns True.
     """
     arrays = model.arrays() if isinstance(model, Model) else model
-    stepper = Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance))
+    terms = [*default_terms(arrays, settings, contact_law), *extra_terms]
+    stepper = Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance), terms)
     state = state if state is not None else initial_state(arrays, stepper.method)
     result = Result(arrays.block_names, stepper.method.name, keep_history, keep_vertices=keep_vertices)
     sinks: list[Recorder] = [result, *recorders]

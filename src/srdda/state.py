@@ -2,19 +2,23 @@
 
 A :class:`State` is frozen: a step makes a new one. Arrays cover all blocks
 (shapes in terms of the block type: ``dim`` coordinates, ``ndof`` unknowns,
-``n_strain`` stress components).
+``n_strain`` stress components). What a step term carries from one step to
+the next (the contacts, the rock bolts' breaks, a user's term's own state)
+is in ``carried`` under the term's name: the state knows no term.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
-from .contact.pipeline import ContactSet
 from .geometry.polygon import BlockMoments
+from .geometry.polyhedron import PolyhedronMoments
 from .integrators.methods import Method
+from .energy_names import LEDGER
 from .model import ModelArrays
-from .term import LEDGER
 
 __all__ = ["State", "initial_state", "mass_density"]
 
@@ -31,16 +35,23 @@ class State:
     acceleration: np.ndarray  # (nb, ndof)
     stress: np.ndarray  # (nb, n_strain)
     rotation: np.ndarray  # accumulated rotation, as the block type composes it
-    moments: BlockMoments  # block integrals of ``vertices``, computed once per state
+    moments: BlockMoments | PolyhedronMoments  # block integrals of ``vertices``, computed once per state
     multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))  # μ of the last step (constraint rows)
     ledger: np.ndarray = field(default_factory=lambda: np.zeros(len(LEDGER)))  # cumulative work, see LEDGER
-    contacts: ContactSet | None = None  # contacts as the step that led here ended them
+    carried: Mapping[str, Any] = field(default_factory=dict)  # by term name: what the step carries over
     dt_next: float | None = None  # the step-size control's Δt for the next step (None: the run's dt)
-    bolt_broken: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))  # (n_bolts,)
-    bolt_break_time: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (n_bolts,) s, nan while intact
+
+    @property
+    def contacts(self) -> Any:
+        """The contacts as the step that led here ended them (the contact term's carried state), or None."""
+        return self.carried.get("contacts")
+
+    def carrying(self, name: str, value: Any) -> State:
+        """This state with ``value`` carried under the term name ``name``."""
+        return replace(self, carried={**self.carried, name: value})
 
 
-def mass_density(arrays: ModelArrays, moments: BlockMoments) -> np.ndarray:
+def mass_density(arrays: ModelArrays, moments: BlockMoments | PolyhedronMoments) -> np.ndarray:
     """Density (nb,) of the blocks in the configuration of ``moments``: their constant mass / their volume."""
     return arrays.block_mass / moments.volume
 
@@ -63,7 +74,5 @@ def initial_state(arrays: ModelArrays, method: Method) -> State:
     acc[arrays.block_fixed] = 0.0
     velocity = arrays.velocity.copy()
     velocity[arrays.block_fixed] = 0.0
-    n_bolts = arrays.links.n_bolts
     return State(0, 0.0, arrays.vertices.copy(), arrays.points.copy(), velocity, acc, arrays.stress.copy(),
-                 bt.initial_rotation(arrays.n_blocks), mom, np.zeros(arrays.links.n_multipliers),
-                 bolt_broken=np.zeros(n_bolts, dtype=bool), bolt_break_time=np.full(n_bolts, np.nan))
+                 bt.initial_rotation(arrays.n_blocks), mom, np.zeros(arrays.links.n_multipliers))

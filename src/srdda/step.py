@@ -15,6 +15,7 @@ reason, or diverged with a message); it raises nothing to steer the run.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
 
@@ -23,6 +24,7 @@ import numpy as np
 from .assembly.blocks import GyroscopicTerm, block_terms
 from .assembly.system import BlockSystem
 from .constraints import point_terms
+from .contact.law import ContactLaw
 from .contact.pipeline import ContactModel, ContactParameters, ContactTerm
 from .integrators.methods import Method
 from .integrators.secant import SecantPass
@@ -32,7 +34,7 @@ from .solvers import LinearSolver, SolverError
 from .state import State
 from .term import StepContext, StepCut, Term
 
-__all__ = ["StepOutcome", "Stepper", "model_half_height", "contact_parameters", "time_step_advice"]
+__all__ = ["StepOutcome", "Stepper", "default_terms", "model_half_height", "contact_parameters", "time_step_advice"]
 
 
 @dataclass(frozen=True)
@@ -85,25 +87,40 @@ def time_step_advice(arrays: ModelArrays, settings: RunSettings) -> str | None:
             f"near that. Give dt ≤ {bound:.2g} s (or raise max_displacement_ratio)")
 
 
+def default_terms(arrays: ModelArrays, settings: RunSettings, contact_law: ContactLaw | None = None) -> list[Term]:
+    """The terms of a run of ``arrays`` under ``settings``, in assembly order (docs/architecture.md).
+
+    Inertia, elasticity, initial stress and body force; the model's point
+    terms (fixed points, loads, springs, hinges, driven points, base
+    acceleration, bolts); the gyroscopic term of 3D blocks under the methods
+    that have it; contacts (with ``contact_law``, Mohr-Coulomb by default)
+    when the settings ask for them and some block may touch another.
+    """
+    method = settings.resolved_method()
+    terms: list[Term] = [*block_terms(), *point_terms(arrays, settings.penalty)]
+    bt = arrays.block_type
+    if method.gyroscopic and bt.rotation.stop - bt.rotation.start > 1:  # rotations about several axes
+        terms.append(GyroscopicTerm(settings.secant_tolerance))
+    if settings.contacts and arrays.n_blocks > 1:
+        w0 = model_half_height(arrays.vertices)
+        model = ContactModel(arrays, contact_parameters(arrays, settings, w0), contact_law)
+        if np.any(model.can_touch):
+            terms.append(ContactTerm(model, settings.open_close_max_iterations,
+                                     settings.max_displacement_ratio * w0, settings.dt))
+    return terms
+
+
 class Stepper:
     """The terms of a run and the step that loops over them."""
 
-    def __init__(self, arrays: ModelArrays, settings: RunSettings, solver: LinearSolver) -> None:
+    def __init__(self, arrays: ModelArrays, settings: RunSettings, solver: LinearSolver,
+                 terms: Sequence[Term] | None = None) -> None:
+        """``terms``: the step's terms (default: :func:`default_terms`)."""
         self.arrays = arrays
         self.settings = settings
         self.method: Method = settings.resolved_method()
         self.solver = solver
-        self.terms: list[Term] = [*block_terms(), *point_terms(arrays, settings.penalty)]
-        bt = arrays.block_type
-        if self.method.gyroscopic and bt.rotation.stop - bt.rotation.start > 1:  # rotations about several axes
-            self.terms.append(GyroscopicTerm(settings.secant_tolerance))
-        if settings.contacts and arrays.n_blocks > 1:
-            w0 = model_half_height(arrays.vertices)
-            params = contact_parameters(arrays, settings, w0)
-            model = ContactModel(arrays, params)
-            if np.any(model.can_touch):
-                self.terms.append(ContactTerm(model, settings.open_close_max_iterations,
-                                              settings.max_displacement_ratio * w0, settings.dt))
+        self.terms: list[Term] = list(terms) if terms is not None else default_terms(arrays, settings)
         self.secant = SecantPass(settings.secant_tolerance, settings.secant_max_iterations)
 
     def begin(self, state: State, dt: float) -> tuple[StepContext, list[Term]]:

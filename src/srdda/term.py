@@ -13,7 +13,8 @@ acceleration, contacts and the secant pass. Each term
   are accepted as they are then;
 * ``review``: after the update, may cut the step (a vertex moved too far, a
   contact penetrated too deep) or bound the next Δt;
-* ``commit``: stores what it carries over to the next step on the new state;
+* ``commit``: stores what it carries over to the next step on the new state,
+  under its ``name`` in ``State.carried`` (:meth:`srdda.state.State.carrying`);
 * ``energy`` / ``work``: its stored energy (one of :data:`ENERGY_KINDS`) and the
   work it did over the step (increments of the :data:`LEDGER`).
 
@@ -26,6 +27,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .energy_names import ENERGY_KINDS, LEDGER
+
 if TYPE_CHECKING:
     from .assembly.system import BlockSystem
     from .integrators.methods import Method
@@ -36,11 +39,6 @@ if TYPE_CHECKING:
 
 __all__ = ["StepContext", "Term", "StepCut", "ENERGY_KINDS", "LEDGER"]
 
-ENERGY_KINDS = ("kinetic", "gravity", "elastic", "spring", "contact")
-# Work that enters or leaves over the run (J per m in 2D, J in 3D), see srdda.ledger.
-LEDGER = ("work_loads", "work_prescribed", "work_constraints", "dissipated", "dissipated_friction",
-          "dissipated_contact", "dissipated_springs")
-
 
 @dataclass
 class StepContext:
@@ -49,7 +47,7 @@ class StepContext:
     Stiffnesses a term needs (the run's penalty) are given to it when it is
     made. ``theta`` is the rotation increment per block that the method linearises
     about (None: Shi's T at t; else the secant T_sec, see
-    :mod:`srdda.kinematics.update`); the secant pass updates it between solves.
+    :mod:`srdda.kinematics.update2d`); the secant pass updates it between solves.
     """
 
     arrays: ModelArrays
@@ -81,6 +79,7 @@ class StepCut:
 class Term:
     """Base class of step terms; every method is a no-op (see the module doc)."""
 
+    name: str = ""  # the key of what the term carries between steps in State.carried ("" carries nothing)
     energy_kind: str | None = None  # which of ENERGY_KINDS ``energy`` reports
     cuts_step: bool = False
     max_iterations: int = 1

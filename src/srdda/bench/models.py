@@ -28,7 +28,7 @@ import shapely
 
 from ..cutmodel import add_cut_polyhedra
 from ..geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
-from ..geometry.jointsets import JointSet, joint_traces
+from ..geometry.jointsets2d import JointSet, joint_traces
 from ..geometry.jointsets3d import JointSet3D, joint_planes
 from ..geometry.polyhedron import box
 from ..io.ddainput import BlockMaterialSpec, DDAInput

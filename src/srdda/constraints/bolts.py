@@ -14,9 +14,9 @@ installation:
   (a small-displacement dowel: the projection is that of the installed bolt);
 * failure: when N at the end of an accepted step exceeds the strength, the bolt
   breaks for good: from the next step it adds nothing. The break and its time
-  (the end of that step) are on the :class:`~srdda.state.State`
-  (``bolt_broken``, ``bolt_break_time``), so a checkpoint keeps them and a
-  resumed run goes on with the bolt broken. The energy the bolt held goes to
+  (the end of that step) are the term's carried state (:class:`BoltState` in
+  ``State.carried["bolts"]``), so a checkpoint keeps them and a resumed run
+  goes on with the bolt broken. The energy the bolt held goes to
   the ledger's ``dissipated`` at the break, so the balance stays continuous.
 
 Every operation is on whole arrays of bolts (no Python loop per bolt).
@@ -25,7 +25,7 @@ scheme's penalty weight c_p.
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -39,14 +39,27 @@ if TYPE_CHECKING:
     from ..model import ModelArrays
     from ..state import State
 
-__all__ = ["BoltTerm", "BoltForces", "bolt_forces", "bolt_broken"]
+__all__ = ["BoltTerm", "BoltForces", "BoltState", "bolt_forces", "bolt_state"]
+
+CARRIED = "bolts"  # the bolt term's key in State.carried
 
 
-def bolt_broken(links: ConstraintArrays, state: State) -> np.ndarray:
-    """Broken flag (n,) of every bolt at ``state`` (a state without the flags: every bolt intact)."""
-    if len(state.bolt_broken) != links.n_bolts:  # a checkpoint written before bolts existed
-        return np.zeros(links.n_bolts, dtype=bool)
-    return np.asarray(state.bolt_broken, dtype=bool)
+@dataclass(frozen=True)
+class BoltState:
+    """Which bolts have broken, and when (the bolt term's carried state)."""
+
+    broken: np.ndarray  # (n_bolts,) bool
+    break_time: np.ndarray  # (n_bolts,) s, nan while intact
+
+    @classmethod
+    def intact(cls, n_bolts: int) -> BoltState:
+        return cls(np.zeros(n_bolts, dtype=bool), np.full(n_bolts, np.nan))
+
+
+def bolt_state(links: ConstraintArrays, state: State) -> BoltState:
+    """The bolts' breaks at ``state`` (a state that carries none: every bolt intact)."""
+    carried = state.carried.get(CARRIED)
+    return carried if carried is not None else BoltState.intact(links.n_bolts)
 
 
 class BoltForces:
@@ -82,24 +95,22 @@ class BoltForces:
 
 def bolt_forces(links: ConstraintArrays, state: State) -> BoltForces:
     """The bolts' ends, axial and shear forces at ``state``."""
-    return BoltForces(links, state.points, bolt_broken(links, state))
+    return BoltForces(links, state.points, bolt_state(links, state).broken)
 
 
 class BoltTerm(Term):
     """Every rock bolt of the model (module doc)."""
 
+    name = CARRIED
     energy_kind = "spring"
 
     def __init__(self, links: ConstraintArrays) -> None:
         self.links = links
-        self._broken = np.zeros(links.n_bolts, dtype=bool)  # the flags at t, carried to t + Δt by commit
-        self._break_time = np.full(links.n_bolts, np.nan)
+        self._at_start = BoltState.intact(links.n_bolts)  # the breaks at t, carried to t + Δt by commit
 
     def begin(self, ctx: StepContext) -> None:
-        """Keep the broken flags and break times of the state at t (the updated state gets them at commit)."""
-        self._broken = bolt_broken(self.links, ctx.state)
-        times = ctx.state.bolt_break_time
-        self._break_time = times if len(times) == self.links.n_bolts else np.full(self.links.n_bolts, np.nan)
+        """Keep the breaks of the state at t (the updated state gets them at commit)."""
+        self._at_start = bolt_state(self.links, ctx.state)
 
     @property
     def at_points(self) -> bool:
@@ -136,7 +147,7 @@ class BoltTerm(Term):
 
     def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
         """The energy of the bolts that break at the end of this step leaves as ``dissipated``."""
-        bolts = BoltForces(self.links, new.points, self._broken)
+        bolts = BoltForces(self.links, new.points, self._at_start.broken)
         breaking = bolts.breaking(self.links)
         if not np.any(breaking):
             return None
@@ -146,7 +157,7 @@ class BoltTerm(Term):
 
     def commit(self, new: State) -> State:
         """Bolts whose axial force exceeds their strength at the new state break, at its time."""
-        links = self.links
-        breaking = BoltForces(links, new.points, self._broken).breaking(links)
-        return replace(new, bolt_broken=self._broken | breaking,
-                       bolt_break_time=np.where(breaking, new.time, self._break_time))
+        links, start = self.links, self._at_start
+        breaking = BoltForces(links, new.points, start.broken).breaking(links)
+        return new.carrying(self.name, BoltState(start.broken | breaking,
+                                                 np.where(breaking, new.time, start.break_time)))

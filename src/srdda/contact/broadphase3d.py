@@ -24,8 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .candidates import grow_boxes
-from .growable import room_for_row
+from .candidates import grow_boxes, room_for_row
 
 __all__ = ["candidate_pairs_3d"]
 

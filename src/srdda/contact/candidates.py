@@ -20,11 +20,14 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba import njit
 
 if TYPE_CHECKING:
     from ..model import ModelArrays
 
-__all__ = ["block_boxes", "grow_boxes", "boxes_within", "KeptCandidates", "PairFinder", "pair_keys"]
+__all__ = ["block_boxes", "grow_boxes", "boxes_within", "KeptCandidates", "PairFinder", "pair_keys", "room_for_row"]
+
+GROWTH = 2  # a full row buffer is replaced by one this many times as long
 
 
 def block_boxes(vertices: np.ndarray, block_ptr: np.ndarray) -> np.ndarray:
@@ -101,3 +104,14 @@ class PairFinder:
         if len(self.excluded):
             pairs = pairs[~np.isin(pair_keys(pairs, self.n_blocks), self.excluded)]
         return boxes, pairs
+
+
+@njit(cache=True)
+def room_for_row(buf: np.ndarray, n: int) -> np.ndarray:
+    """``buf`` if row ``n`` fits in it, else a copy of its first n rows in a buffer twice as long: the rows the
+    compiled broad and narrow phases find, without knowing how many they will find."""
+    if n < buf.shape[0]:
+        return buf
+    bigger = np.empty((GROWTH * buf.shape[0], buf.shape[1]), dtype=buf.dtype)
+    bigger[:n] = buf[:n]
+    return bigger

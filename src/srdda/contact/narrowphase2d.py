@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .growable import room_for_row
+from .candidates import room_for_row
 
 __all__ = ["VERTEX_EDGE", "VERTEX_VERTEX", "FOUND_VERTEX", "FOUND_EDGE", "FOUND_KIND", "FOUND_FIELDS",
            "narrow_phase_2d"]

@@ -61,7 +61,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .growable import room_for_row
+from .candidates import room_for_row
 
 __all__ = ["VERTEX_FACE", "EDGE_EDGE", "FOUND_FIELDS", "narrow_phase_3d"]
 

@@ -18,8 +18,8 @@ by the shape types); docs/contacts.md gives the reason of each difference.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Literal, Protocol
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numba import njit
@@ -27,21 +27,20 @@ from numba import njit
 from ..assembly.system import BlockSystem, scatter_add
 from ..model import ModelArrays
 from ..term import LEDGER, StepContext, StepCut, Term
-from .candidates import PairFinder, pair_keys
+from .candidates import pair_keys
 from .detect2d import Detector2D
 from .detect3d import Detector3D
 from .law import ContactLaw, ContactStiffness, JointResponse, MohrCoulomb
 from .openclose import (LOCKED, OPEN, SLIDING, deepest_penetration, magnitudes, negligible_changes,
                         negligible_force, never_held, next_states)
 from .penalty import ContactSprings, directional_rows, is_large
-from .record import ContactRecord
-from .transfer import match_previous
+from .record import ContactRecord, match_previous
 
 if TYPE_CHECKING:
     from ..state import State
 
 __all__ = ["ContactParameters", "ContactSet", "ContactStep", "ContactModel", "ContactTerm", "ContactKind",
-           "CONTACT_KINDS", "Detector"]
+           "CONTACT_KINDS"]
 
 
 @dataclass(frozen=True)
@@ -64,28 +63,12 @@ class ContactParameters:
         return ContactStiffness(self.normal_stiffness, self.shear_stiffness)
 
 
-class Detector(Protocol):
-    """What a dimension's detector gives the pipeline (:mod:`.detect2d`, :mod:`.detect3d`)."""
-
-    pairs: PairFinder
-
-    def detect(self, vertices: np.ndarray) -> ContactRecord | None:
-        """The contacts of a configuration; None when no contact is near."""
-
-
 @dataclass(frozen=True)
 class ContactKind:
-    """One row of :data:`CONTACT_KINDS`: a dimension's detector and its two open-close choices.
-
-    ``friction_normal``: how the normal force of a sliding contact's friction
-    follows the solves: ``"secant"``, a secant step per contact on N_used ->
-    N_solved (2D: a glancing impact's friction feeds back on its own N), or
-    ``"substitution"``, the last solve's N, taken only where no contact of the
-    same two blocks changed state in it (3D: the contacts of a face share the
-    block's tilt, and the per-contact secant step diverged).
-    ``band``: whether Shi's open-close band f0·w0 (``open_close_tolerance``)
-    acts; in 3D its pull created energy that the property tests found.
-    """
+    """One row of :data:`CONTACT_KINDS`: a dimension's detector and the two open-close choices that differ,
+    each for a reason docs/contacts.md gives: how a sliding contact's friction normal force follows the solves
+    (``"secant"``: a secant step per contact; ``"substitution"``: the last solve's N where no contact of the
+    same blocks changed state) and whether Shi's band f0·w0 acts."""
 
     detector: type[Detector2D] | type[Detector3D]
     friction_normal: Literal["secant", "substitution"]
@@ -474,8 +457,10 @@ class ContactModel:
 
 
 class ContactTerm(Term):
-    """Block contacts as a step term (module doc): open-close iteration, step cuts, contact energy."""
+    """Block contacts as a step term (module doc): open-close iteration, step cuts, contact energy; the
+    :class:`ContactSet` of the last step is carried in ``State.carried["contacts"]``."""
 
+    name = "contacts"
     energy_kind = "contact"
     cuts_step = True  # an open-close that does not settle within ``max_iterations`` solves cuts Δt
 
@@ -535,7 +520,7 @@ class ContactTerm(Term):
         return min(self.dt_max, ctx.dt * growth)
 
     def commit(self, new: State) -> State:
-        return replace(new, contacts=self.step.commit() if self.step is not None else None)
+        return new.carrying(self.name, self.step.commit() if self.step is not None else None)
 
     def energy(self, arrays: ModelArrays, state: State) -> float:
         return state.contacts.energy if state.contacts is not None else 0.0

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ContactRecord"]
+__all__ = ["ContactRecord", "match_previous"]
 
 
 @dataclass(frozen=True)
@@ -71,3 +71,18 @@ class ContactRecord:
         """Shear (n, k) of springs at ``reference``: r_a − r_b in the frame."""
         r_a, r_b = self.reference_points(reference)
         return np.einsum("nki,ni->nk", self.frame, r_a - r_b)
+
+
+def match_previous(new_keys: np.ndarray, old_keys: np.ndarray) -> np.ndarray:
+    """For each new key the index of the same key among ``old_keys`` (-1 if new): one ``searchsorted``.
+
+    A contact found again at the next step keeps its state, reference point,
+    normal force and bond (Shi 1988: contact transfer).
+    """
+    if len(old_keys) == 0:
+        return np.full(len(new_keys), -1, dtype=np.int64)
+    order = np.argsort(old_keys, kind="stable")
+    sorted_keys = old_keys[order]
+    pos = np.minimum(np.searchsorted(sorted_keys, new_keys), len(sorted_keys) - 1)
+    found = sorted_keys[pos] == new_keys
+    return np.where(found, order[pos], -1)

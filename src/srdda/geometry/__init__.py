@@ -1,6 +1,6 @@
 """Polygons and their integrals (the dimension-dependent geometry seam); block cutting and joint sets."""
-from .cutting import NO_JOINT, BlockCut, CuttingError, cut_blocks
-from .jointsets import JointSet, circular_opening, joint_traces, polygonal_opening
+from .cutting2d import NO_JOINT, BlockCut, CuttingError, cut_blocks
+from .jointsets2d import JointSet, circular_opening, joint_traces, polygonal_opening
 from .polygon import BlockMoments, PolygonError, block_moments, next_vertex_index, normalize_polygon
 
 __all__ = ["NO_JOINT", "BlockCut", "BlockMoments", "CuttingError", "JointSet", "PolygonError", "block_moments",

@@ -46,7 +46,7 @@ from numba import njit, types
 from numba.typed import List
 from scipy.spatial import ConvexHull, QhullError
 
-from .cutting import NO_JOINT, CuttingError
+from .cutting2d import NO_JOINT, CuttingError
 from .jointsets3d import JointPlanes
 from .polyhedron import (PLANARITY_TOLERANCE, PolyhedronError, PolyhedronMesh, box, normalize_polyhedra,
                          normalize_polyhedron, polyhedron_moments)

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .cutting import CuttingError
+from .cutting2d import CuttingError
 
 __all__ = ["JointPlanes", "JointSet3D", "dip_and_direction", "fisher_directions", "joint_planes", "plane_normal"]
 

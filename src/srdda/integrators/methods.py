@@ -10,7 +10,7 @@ srdda      exact-rotation   paper (ρ∞)          secant          objective
 
 ``start`` evaluates the shape function of loads, springs and constraints in
 the configuration at t (Shi); ``secant`` iterates the step so that they use
-T_sec at the converged rotation increment (see :mod:`srdda.kinematics.update`).
+T_sec at the converged rotation increment (see :mod:`srdda.kinematics.update2d`).
 ``objective`` rotates stresses (and strain rates) with the block: Eq. 50 in
 the co-moving frame, written back in global components. In 3D srdda also
 takes the rate of change of a block's rotational inertia (the gyroscopic

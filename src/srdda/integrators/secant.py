@@ -2,7 +2,7 @@
 
 Points, springs, hinges and contacts enter a step through shape functions.
 Under the ``secant`` linearisation they use T_sec at the block's rotation
-increment θ (:mod:`srdda.kinematics.update`), which is known only after the
+increment θ (:mod:`srdda.kinematics.update2d`), which is known only after the
 solve: the step starts from θ = Δt·ω(t) and is solved again with the solved
 θ until |θ|·|θ - θ_prev| is below the tolerance (the mismatch between the
 linearised and the exact rotation displacement of a point per metre of

@@ -9,6 +9,9 @@ this module knowing them:
 * a field holding a dataclass (e.g. a contact set) is flattened into
   ``f.<subfield>`` datasets as above, with ``f__present`` (bool per
   checkpoint; False for None) whose attr ``class`` names the dataclass;
+* a field holding a mapping of names to dataclasses (``State.carried``: what
+  each term carries) stores each entry ``k`` as the field ``f.k`` above; a
+  name that appears at a later checkpoint is absent from the earlier ones;
 * ``step`` and ``time`` are appended last: a checkpoint counts only when every
   per-checkpoint dataset (``step``, ``time``, ``*__count``, ``*__present``)
   has its row, so one cut short by a kill is ignored. A writer may append
@@ -23,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+from collections.abc import Mapping
 from typing import Any
 
 import h5py
@@ -82,22 +86,41 @@ def append_checkpoint(group: h5py.Group, state: Any, commit: bool = True) -> Non
     ``commit=False`` leaves out its ``step`` row (:func:`commit_checkpoint`): until then it does not count.
     """
     group.attrs["state_class"] = _class_path(state)
+    done = group["time"].shape[0] if "time" in group else 0  # checkpoints before this one
     for f in dataclasses.fields(state):
         if f.name in SKIPPED:
             continue
         value = getattr(state, f.name)
-        if dataclasses.is_dataclass(value) or value is None:
-            present = f"{f.name}__present"
-            _append(group, present, np.array([value is not None]))
-            if value is not None:
-                group[present].attrs["class"] = _class_path(value)
-                for g in dataclasses.fields(value):
-                    _append_value(group, f"{f.name}.{g.name}", getattr(value, g.name))
+        if isinstance(value, Mapping):
+            for key in sorted({*value, *_mapping_keys(group, f.name)}):
+                _append_optional(group, f"{f.name}.{key}", value.get(key), done)
+        elif dataclasses.is_dataclass(value) or value is None:
+            _append_optional(group, f.name, value, done)
         else:
             _append_value(group, f.name, value)
     _append(group, "time", np.array([state.time], dtype=float))
     if commit:
         commit_checkpoint(group, state)
+
+
+def _append_optional(group: h5py.Group, name: str, value: Any, done: int) -> None:
+    """Append a dataclass or None as ``name`` (its ``__present`` flag, and its fields when present); a name
+    new at checkpoint ``done`` is marked absent at the ones before."""
+    present = f"{name}__present"
+    if present not in group and done:
+        _append(group, present, np.zeros(done, dtype=bool))
+    _append(group, present, np.array([value is not None]))
+    if value is not None:
+        group[present].attrs["class"] = _class_path(value)
+        for g in dataclasses.fields(value):
+            _append_value(group, f"{name}.{g.name}", getattr(value, g.name))
+
+
+def _mapping_keys(group: h5py.Group, name: str) -> list[str]:
+    """The entries of mapping field ``name`` stored so far (their ``name.<key>__present`` flags)."""
+    prefix, suffix = f"{name}.", "__present"
+    return [k[len(prefix):-len(suffix)] for k in group
+            if k.startswith(prefix) and k.endswith(suffix) and "." not in k[len(prefix):]]
 
 
 def commit_checkpoint(group: h5py.Group, state: Any) -> None:
@@ -145,28 +168,38 @@ def _read_value(group: h5py.Group, name: str, index: int) -> Any:
     return value[0] if group[name].attrs.get("scalar", False) else value
 
 
+def _read_optional(group: h5py.Group, name: str, index: int) -> Any:
+    """The dataclass (or None) stored as ``name`` at checkpoint ``index``."""
+    present = f"{name}__present"
+    if not group[present][index]:
+        return None
+    sub = _import(str(group[present].attrs["class"]))
+    j = int(np.sum(group[present][:index]))  # its rows are those of the present values only
+    missing = [g.name for g in dataclasses.fields(sub) if f"{name}.{g.name}__count" not in group]
+    if missing:
+        raise ValueError(f"the checkpoint's {name} lacks {', '.join(missing)} (written by another srdda "
+                         "version); run the model again")
+    return sub(**{g.name: _read_value(group, f"{name}.{g.name}", j) for g in dataclasses.fields(sub)})
+
+
 def read_checkpoint(group: h5py.Group, index: int, moments: Any) -> Any:
     """The State of checkpoint ``index``; ``moments(vertices) -> BlockMoments`` recomputes the integrals."""
     cls = _import(str(group.attrs["state_class"]))
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.name not in SKIPPED}
+    stored = {k.split(".")[0].removesuffix("__present").removesuffix("__count") for k in group} - {*SKIPPED}
+    unknown = sorted(stored - set(fields))
+    if unknown:  # what a State of another srdda carried (e.g. contacts on the State itself): not to be lost
+        raise ValueError(f"the checkpoint holds {', '.join(unknown)}, which this srdda's State has not (written "
+                         "by an older version); run the model again")
     kwargs: dict[str, Any] = {"step": int(group["step"][index]), "time": float(group["time"][index])}
-    for f in dataclasses.fields(cls):
-        if f.name in SKIPPED:
-            continue
-        present = f"{f.name}__present"
-        if present in group:
-            if not group[present][index]:
-                kwargs[f.name] = None
-                continue
-            sub = _import(str(group[present].attrs["class"]))
-            j = int(np.sum(group[present][:index]))  # its rows are those of the present values only
-            missing = [g.name for g in dataclasses.fields(sub) if f"{f.name}.{g.name}__count" not in group]
-            if missing:
-                raise ValueError(f"the checkpoint's {f.name} lacks {', '.join(missing)} (written by another srdda "
-                                 "version); run the model again")
-            kwargs[f.name] = sub(**{g.name: _read_value(group, f"{f.name}.{g.name}", j)
-                                    for g in dataclasses.fields(sub)})
-        elif f"{f.name}__count" in group:
-            kwargs[f.name] = _read_value(group, f.name, index)
+    for name in fields:
+        if f"{name}__present" in group:
+            kwargs[name] = _read_optional(group, name, index)
+        elif f"{name}__count" in group:
+            kwargs[name] = _read_value(group, name, index)
+        elif _mapping_keys(group, name):
+            entries = {key: _read_optional(group, f"{name}.{key}", index) for key in _mapping_keys(group, name)}
+            kwargs[name] = {key: value for key, value in entries.items() if value is not None}
         # a field the file does not have keeps its default (a file written before the field existed)
     kwargs["moments"] = moments(kwargs["vertices"])
     if not isinstance(kwargs["moments"], (BlockMoments, PolyhedronMoments)):

@@ -4,7 +4,7 @@
 Windows XML) both fill a :class:`DDAInput` in the file's own units;
 :meth:`DDAInput.in_si` converts it to SI, :meth:`DDAInput.use_default_analysis`
 fills what a missing analysis file would give, :meth:`DDAInput.to_model` cuts the
-blocks (:func:`srdda.geometry.cutting.cut_blocks`) and maps the parameters onto
+blocks (:func:`srdda.geometry.cutting2d.cut_blocks`) and maps the parameters onto
 srdda's (the table is in ``docs/cutting.md``). Everything srdda does not
 support is reported with ``warnings.warn`` naming it.
 """
@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import shapely
 
-from ..geometry.cutting import NO_JOINT, BlockCut, CuttingError, cut_blocks
+from ..geometry.cutting2d import NO_JOINT, BlockCut, CuttingError, cut_blocks
 from ..model import JointMaterial, Material, Model, ModelError
 from ..settings import RunSettings
 from ..units import UNIT_SYSTEMS, UnitSystem, detect_unit_system

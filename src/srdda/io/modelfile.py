@@ -19,7 +19,7 @@ from pydantic import ValidationError
 
 from ..cutmodel import add_cut_polyhedra
 from ..history import HistoryError, MotionHistory
-from ..geometry.cutting import CuttingError
+from ..geometry.cutting2d import CuttingError
 from ..geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
 from ..geometry.jointsets3d import JointPlanes, JointSet3D, joint_planes, plane_normal
 from ..geometry.polygon import PolygonError

@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .shape import NDOF, block_mass_matrix
+from .shape2d import NDOF, block_mass_matrix
 from .shape3d import block_mass_matrix_3d, compose_rotations, rotation_matrix_3d
-from .update import point_displacement, rotate_symmetric_components, secant_shape_function
+from .update2d import point_displacement, rotate_symmetric_components, secant_shape_function
 from .update3d import point_displacement_3d, rotate_symmetric_components_3d, secant_shape_function_3d
 
 __all__ = ["BlockType", "PlaneBlocks", "SolidBlocks", "PLANE", "SOLID", "block_type_of_dimension"]

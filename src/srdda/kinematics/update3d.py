@@ -1,4 +1,4 @@
-"""How a 3D block's points move over a step, for each kinematics (3D twin of :mod:`.update`).
+"""How a 3D block's points move over a step, for each kinematics (3D twin of :mod:`.update2d`).
 
 * ``linear`` (DDA0): Δu(p) = T(p)·Δd with T of Eq. A1. The rotation part is
   I + [Δr]×, whose determinant is 1 + |Δr|²: a rotating block's volume grows by
@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .shape3d import rodrigues_coefficients, shape_function_3d, skew
-from .update import KINEMATICS
+from .update2d import KINEMATICS
 
 __all__ = ["point_displacement_3d", "rotate_symmetric_components_3d", "secant_shape_function_3d"]
 

@@ -7,7 +7,7 @@ DDA slope files: 25° rises to the right, 100° leans left), perpendicular
 and ``bridge`` (intact rock between collinear traces). Seeded random
 perturbations: normal scatter of spacing, dip and trace length, and a random
 shift of each trace line along itself. Traces are clipped to the domain with
-shapely (vectorised), so they can be fed to :func:`srdda.geometry.cutting.cut_blocks`.
+shapely (vectorised), so they can be fed to :func:`srdda.geometry.cutting2d.cut_blocks`.
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from .cutting import CuttingError
+from .cutting2d import CuttingError
 
 __all__ = ["JointSet", "circular_opening", "joint_traces", "polygonal_opening"]
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .shape import shape_function
+from .shape2d import shape_function
 
 __all__ = ["secant_shape_function", "point_displacement", "rotate_symmetric_components", "KINEMATICS"]
 

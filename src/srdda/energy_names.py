@@ -1,0 +1,16 @@
+"""The names of the energies terms store and of the work the ledger books (:mod:`srdda.ledger`).
+
+A leaf module: the term interface, the state and the ledger all read these
+names, and it imports nothing of theirs.
+"""
+from __future__ import annotations
+
+__all__ = ["ENERGY_KINDS", "LEDGER", "ENERGY_NAMES"]
+
+# what a term's ``energy`` may report (srdda.term.Term.energy_kind)
+ENERGY_KINDS = ("kinetic", "gravity", "elastic", "spring", "contact")
+# work that enters or leaves over the run (J per m in 2D, J in 3D): the columns of State.ledger
+LEDGER = ("work_loads", "work_prescribed", "work_constraints", "dissipated", "dissipated_friction",
+          "dissipated_contact", "dissipated_springs")
+# the energies of a run's records: the stored ones, their total, the ledger and the balance
+ENERGY_NAMES = (*ENERGY_KINDS, "total", *LEDGER, "balance")
