@@ -381,10 +381,12 @@ def verify_command(cases: tuple[str, ...], as_json: bool, quick: bool, quiet: bo
 @click.option("--dt", type=click.FloatRange(min=0, min_open=True), default=None,
               help="Time step (s) for every model (default: the model's).")
 @click.option("--method", type=click.Choice(METHODS), default="dda0", show_default=True)
+@click.option("--contact-solver", type=click.Choice(["open-close", "newton"]), default=None,
+              help="How the steps' contact problems are solved (default: each model's own setting).")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=900.0, show_default=True,
               help="Wall-time limit per model (s); a model that reaches it is reported with the steps it made.")
 def bench_command(as_json: bool, quick: bool, models: tuple[str, ...], steps: int | None, dt: float | None,
-                  method: str, timeout: float) -> None:
+                  method: str, contact_solver: str | None, timeout: float) -> None:
     """Time the standard benchmark models, each in a fresh process: steps/s, solves, memory (docs/performance.md)."""
     from .bench.runner import CASES, QUICK, format_table, run_cases
 
@@ -393,7 +395,8 @@ def bench_command(as_json: bool, quick: bool, models: tuple[str, ...], steps: in
         raise click.UsageError(f"unknown model(s) {', '.join(unknown)}; choose from {', '.join(CASES)}")
     names = list(models) or list(QUICK if quick else CASES)
     rows = run_cases(names, steps, quick, method, dt, timeout,
-                     progress=None if as_json else lambda name: click.echo(f"running {name} ...", err=True))
+                     progress=None if as_json else lambda name: click.echo(f"running {name} ...", err=True),
+                     contact_solver=contact_solver)
     click.echo(json.dumps({"rows": rows}, indent=1) if as_json else format_table(rows))
 
 

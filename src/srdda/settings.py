@@ -65,7 +65,7 @@ Ratio = Annotated[float, Finite]
 
 
 # the settings only the contacts use: changed with contacts = false, they have no effect
-CONTACT_FIELDS = ("contact_penalty", "auto_penalty", "shear_ratio", "contact_distance_factor",
+CONTACT_FIELDS = ("contact_solver", "contact_penalty", "auto_penalty", "shear_ratio", "contact_distance_factor",
                   "contact_angle_tolerance", "penetration_fraction", "open_close_max_iterations",
                   "friction_tolerance", "open_close_freeze_after", "open_close_settle_after")
 
@@ -98,6 +98,9 @@ class RunSettings:
     record_every: Annotated[int, Field(ge=1)] = 1
     # contacts and step control (docs/contacts.md); lengths relative to w0 = half the model height
     contacts: bool = True  # detect and resolve block contacts
+    # how a step's contact problem is solved: Shi's open-close iteration, or Newton's method with a line search on
+    # the step's incremental potential (docs/contacts.md, "The contact solve")
+    contact_solver: Literal["open-close", "newton"] = "open-close"
     contact_penalty: Annotated[NewtonsPerMetre | None, Field(gt=0)] = None  # k_n (N/m); None: ``penalty``
     auto_penalty: Annotated[Ratio | None, Field(gt=0)] = None  # k_n = this × the largest Young's modulus × 1 m
     shear_ratio: Annotated[Ratio, Field(gt=0)] = 0.4  # k_s / k_n

@@ -25,6 +25,7 @@ from .assembly.blocks import GyroscopicTerm, block_terms
 from .assembly.system import BlockSystem
 from .constraints import point_terms
 from .contact.law import ContactLaw
+from .contact.newton import NewtonContactModel
 from .contact.pipeline import ContactModel, ContactParameters, ContactTerm
 from .integrators.methods import Method
 from .integrators.secant import SecantPass
@@ -103,7 +104,8 @@ def default_terms(arrays: ModelArrays, settings: RunSettings, contact_law: Conta
         terms.append(GyroscopicTerm(settings.secant_tolerance))
     if settings.contacts and arrays.n_blocks > 1:
         w0 = model_half_height(arrays.vertices)
-        model = ContactModel(arrays, contact_parameters(arrays, settings, w0), contact_law)
+        kind = NewtonContactModel if settings.contact_solver == "newton" else ContactModel
+        model = kind(arrays, contact_parameters(arrays, settings, w0), contact_law)
         if np.any(model.can_touch):
             terms.append(ContactTerm(model, settings.open_close_max_iterations,
                                      settings.max_displacement_ratio * w0, settings.dt))
@@ -169,12 +171,22 @@ class Stepper:
         base = self.base_system(ctx, terms)
         solves = 0
         changes = 0  # solves after which a step-cutting term (open-close) had not settled
+        searching = [t for t in terms if t.line_search]
+        before: np.ndarray | None = None  # the last iterate (increments then multipliers) of a line search
         while True:
             system = self.assemble(ctx, terms, base)
             try:
                 solution = self.solver.solve(system, system.full_rhs())
             except SolverError as exc:
                 return StepOutcome("diverged", solves, dt, reason=f"{label}: {exc}")
+            if searching:  # Newton: from the last iterate (zero increments at first) towards the solution
+                before = np.zeros_like(solution) if before is None else before
+                delta = solution - before
+                blocks = delta[: system.size].reshape(-1, ndof)
+                alpha = min(t.step_length(before[: system.size].reshape(-1, ndof), blocks,
+                                          lambda: system.quadratic_form(blocks)) for t in searching)
+                solution = before + alpha * delta
+                before = solution
             dd = solution[: system.size].reshape(-1, ndof)
             multipliers = solution[system.size:]
             solves += 1

@@ -7,6 +7,8 @@ acceleration, contacts and the secant pass. Each term
 * ``begin``: looks at the state at t once per step attempt (contacts detect);
 * ``add_to``: adds its matrices and forces to the step's system (once per
   step when ``same_every_solve``, else before every solve);
+* ``step_length``: after each solve, may damp the step towards the solution
+  (a line search: the contacts' Newton iteration, :mod:`srdda.contact.newton`);
 * ``converged``: after each solve, says whether its own iteration has settled
   (open-close, the secant pass); a term whose ``cuts_step`` is True has the
   step cut when it has not settled within ``max_iterations`` solves, the others
@@ -22,6 +24,7 @@ This module sits below the step: the terms import it, never the step.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -95,6 +98,16 @@ class Term:
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         """Add matrices and forces to the step's system."""
+
+    @property
+    def line_search(self) -> bool:
+        """True if the term wants each solve's increments damped by :meth:`step_length` (a Newton iteration)."""
+        return False
+
+    def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
+        """The step α in (0, 1] from the last iterate ``dd_before`` along ``delta`` (the solve's increments
+        minus the last iterate); ``curvature()`` gives δᵀAδ of the solved system."""
+        return 1.0
 
     def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         """After a solve with increments ``dd``: has this term's own iteration settled?"""

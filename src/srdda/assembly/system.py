@@ -353,6 +353,19 @@ class BlockSystem:
     def to_csr(self) -> sp.csr_matrix:
         return self.to_bsr().tocsr()
 
+    def quadratic_form(self, x: np.ndarray) -> float:
+        """xᵀAx of the block matrix A (held blocks' couplings left out), x (nb, ndof): the curvature a line
+        search needs, without assembling A."""
+        value = float(np.einsum("ni,nij,nj->", x, self.diag, x))
+        for bi, bj, blocks, which in zip(self.pair_i, self.pair_j, self.pair_blocks, self.pair_which):
+            pick = np.arange(len(bi)) if which is None else which
+            a, b = bi[pick], bj[pick]
+            if self.held is not None:
+                free = ~(self.held[a] | self.held[b])
+                pick, a, b = pick[free], a[free], b[free]
+            value += 2.0 * float(np.einsum("ni,nij,nj->", x[a], blocks[pick], x[b]))
+        return value
+
     def to_dense(self) -> np.ndarray:
         n = self.size
         if not self.pair_i:

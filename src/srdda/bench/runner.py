@@ -226,8 +226,10 @@ def _warm_up(dim: int) -> None:
     simulation.run(model, replace(settings, n_steps=2))
 
 
-def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout: float) -> dict[str, Any]:
-    """Build and run one model in this process; the row of ``srdda bench --json``."""
+def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout: float,
+            contact_solver: str | None = None) -> dict[str, Any]:
+    """Build and run one model in this process; the row of ``srdda bench --json`` (``contact_solver`` None:
+    the model's own)."""
     start = time.perf_counter()
     _warm_up(case.dim)
     t0 = time.perf_counter()
@@ -235,7 +237,8 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
     arrays = model.arrays()
     build_s = time.perf_counter() - t0
     settings = replace(settings, n_steps=steps, method=method, dt=settings.dt if dt is None else dt,
-                       record_every=max(steps, 1))
+                       record_every=max(steps, 1),
+                       contact_solver=settings.contact_solver if contact_solver is None else contact_solver)
     probe = Probe(deadline=start + timeout)
     note = ""
     with probe.installed():
@@ -252,7 +255,8 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
     n = len(probe.accepted_solves)
     iterations = [k for solver in probe.solvers for k in cg_iterations(solver)]
     row: dict[str, Any] = {
-        "model": case.name, "dim": case.dim, "blocks": arrays.n_blocks, "method": settings.method, "steps": n,
+        "model": case.name, "dim": case.dim, "blocks": arrays.n_blocks, "method": settings.method,
+        "contact_solver": settings.contact_solver, "steps": n,
         "dt": settings.dt, "sim_time": probe.sim_time, "steps_per_s": n / wall if wall > 0 else 0.0,
         "solves_per_step": float(np.mean(probe.accepted_solves)) if n else None,
         "rejected_steps": probe.rejected,
@@ -278,7 +282,8 @@ def _failed_row(case: BenchCase, steps: int, method: str, dt: float | None, note
 
 
 def run_cases(names: list[str], steps: int | None, quick: bool, method: str, dt: float | None,
-              timeout: float, progress: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
+              timeout: float, progress: Callable[[str], None] | None = None,
+              contact_solver: str | None = None) -> list[dict[str, Any]]:
     """Run each named case in its own child process; one row per case, in order."""
     rows = []
     for name in names:
@@ -287,7 +292,8 @@ def run_cases(names: list[str], steps: int | None, quick: bool, method: str, dt:
         if progress is not None:
             progress(name)
         cmd = [sys.executable, "-m", "srdda.bench.runner", name, "--steps", str(n), "--method", method,
-               "--timeout", str(timeout)] + ([] if dt is None else ["--dt", repr(dt)])
+               "--timeout", str(timeout)] + ([] if dt is None else ["--dt", repr(dt)]) \
+            + ([] if contact_solver is None else ["--contact-solver", contact_solver])
         try:
             # the child stops itself at the limit (between solves); this margin covers one long solve
             done = subprocess.run(cmd, capture_output=True, text=True, timeout=2.0 * timeout + 120.0)
@@ -310,13 +316,14 @@ def _num(x: Any, fmt: str) -> str:
 
 def format_table(rows: list[dict[str, Any]]) -> str:
     """The rows as an aligned text table (time shares in %)."""
-    header = ("model", "blocks", "method", "steps", "dt", "sim time", "steps/s", "solves/step", "CG it/solve", "rejected",
+    header = ("model", "blocks", "method", "contacts", "steps", "dt", "sim time", "steps/s", "solves/step", "CG it/solve", "rejected",
               "detect%", "assembly%", "solve%", "open-close%", "other%", "peak MB", "note")
     lines = [header]
     for r in rows:
         shares = [_num(None if f"share_{p}" not in r else 100 * r[f"share_{p}"], ".0f")
                   for p in (*PHASES, "other")]
-        lines.append((r["model"], _num(r["blocks"], "d"), r["method"], f"{r['steps']}/{r.get('steps_requested', '-')}",
+        lines.append((r["model"], _num(r["blocks"], "d"), r["method"], r.get("contact_solver", "-"),
+                      f"{r['steps']}/{r.get('steps_requested', '-')}",
                       _num(r["dt"], "g"), _num(r["sim_time"], ".4g"), _num(r["steps_per_s"], ".3g"),
                       _num(r["solves_per_step"], ".1f"), _num(r.get("cg_iterations_per_solve"), ".0f"),
                       _num(r["rejected_steps"], "d"), *shares,
@@ -333,8 +340,9 @@ def _main() -> None:
     ap.add_argument("--method", default="dda0")
     ap.add_argument("--dt", type=float, default=None)
     ap.add_argument("--timeout", type=float, required=True)
+    ap.add_argument("--contact-solver", default=None)
     args = ap.parse_args()
-    row = measure(CASES[args.model], args.steps, args.method, args.dt, args.timeout)
+    row = measure(CASES[args.model], args.steps, args.method, args.dt, args.timeout, args.contact_solver)
     print(json.dumps(row), flush=True)
 
 

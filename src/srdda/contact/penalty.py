@@ -21,7 +21,6 @@ import numpy as np
 from numba import njit, prange
 
 from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
-from .openclose import LOCKED, OPEN
 
 __all__ = ["ContactSprings", "INCREMENTAL_BLOCKS", "is_large", "directional_rows"]
 
@@ -80,14 +79,14 @@ class ContactSprings:
                         np.ascontiguousarray(dd), dn, ds)
         return dn, ds
 
-    def springs(self, index: np.ndarray, state: np.ndarray) -> PenaltyPairs:
-        """The springs of contacts ``index`` in ``state``: normal if closed, shear if locked, none if open.
+    def springs(self, index: np.ndarray, normal: np.ndarray, shear: np.ndarray) -> PenaltyPairs:
+        """The springs of contacts ``index``: the normal one where ``normal``, the shear ones where ``shear``.
 
         Each row is scaled by the square root of its stiffness, so the pairs'
         own stiffness is 1.
         """
-        rn = self.root_normal[index] * (state[index] != OPEN)
-        rs = self.root_shear[index] * (state[index] == LOCKED)
+        rn = self.root_normal[index] * normal[index]
+        rs = self.root_shear[index] * shear[index]
         (_, k, ndof), n = self.shear_a.shape, len(index)
         rows_a, rows_b, gap = np.empty((n, 1 + k, ndof)), np.empty((n, 1 + k, ndof)), np.empty((n, 1 + k, 1))
         _stacked_rows(index, self.normal_a, self.shear_a, rn, rs, rows_a)
@@ -108,32 +107,33 @@ class ContactSprings:
         return PenaltyPairs(self.block_a[index], r[:, None, None] * rows_a[index], self.block_b[index],
                             r[:, None, None] * rows_b[index], r[:, None] * gap[index], stiffness)
 
-    def add_to(self, system: BlockSystem, state: np.ndarray, c_p: float, by_changes: bool) -> None:
-        """Add the springs of ``state`` to ``system`` (matrix weight c_p, module doc): by changes to the last
-        call's sums if ``by_changes`` and the system has more than ``INCREMENTAL_BLOCKS`` blocks, else afresh."""
-        closed = np.flatnonzero(state != OPEN)
+    def add_to(self, system: BlockSystem, normal: np.ndarray, shear: np.ndarray, c_p: float,
+               by_changes: bool) -> None:
+        """Add the normal springs where ``normal`` and the shear springs where ``shear`` to ``system`` (matrix
+        weight c_p, module doc): by changes to the last call's sums if ``by_changes`` and the system has more
+        than ``INCREMENTAL_BLOCKS`` blocks, else afresh."""
+        acting = np.flatnonzero(normal | shear)
         if not (by_changes and is_large(system.n_blocks)):
-            if len(closed):
-                add_penalty_pairs(system, self.springs(closed, state), c_p)
+            if len(acting):
+                add_penalty_pairs(system, self.springs(acting, normal, shear), c_p)
             return
-        if self._sums is None:  # every contact, the open ones with rows of zero: a coupling block for each
+        if self._sums is None:  # every contact, the idle ones with rows of zero: a coupling block for each
             sums = BlockSystem.empty(system.n_blocks, system.ndof)
-            add_penalty_pairs(sums, self.springs(np.arange(len(state)), state), c_p)
-            cross = sums.pair_blocks[0] if sums.pair_blocks else np.zeros((len(state), system.ndof, system.ndof))
-            self._sums = (sums.diag, sums.rhs, cross, state.copy())
-        diag, rhs, cross, summed_state = self._sums
+            add_penalty_pairs(sums, self.springs(np.arange(len(normal)), normal, shear), c_p)
+            cross = sums.pair_blocks[0] if sums.pair_blocks else np.zeros((len(normal), system.ndof, system.ndof))
+            self._sums = (sums.diag, sums.rhs, cross, np.stack([normal, shear]))
+        diag, rhs, cross, summed = self._sums
         change = BlockSystem(diag, rhs)
-        for shear, now, before in ((False, state != OPEN, summed_state != OPEN),
-                                   (True, state == LOCKED, summed_state == LOCKED)):
-            flipped = np.flatnonzero(now != before)
+        for k, (is_shear, now) in enumerate(((False, normal), (True, shear))):
+            flipped = np.flatnonzero(now != summed[k])
             if len(flipped):
-                add_penalty_pairs(change, self.part(flipped, shear, np.where(now[flipped], 1.0, -1.0)), c_p)
+                add_penalty_pairs(change, self.part(flipped, is_shear, np.where(now[flipped], 1.0, -1.0)), c_p)
                 scatter_add(cross, flipped, change.pair_blocks[-1])  # in place: no gathered copy of the blocks
-        summed_state[:] = state
+        summed[0], summed[1] = normal, shear
         system.diag += diag
         system.rhs += rhs
-        # only the closed contacts' coupling blocks: an open contact's zero block costs every solver iteration
-        system.add_off_diagonal(self.block_a, self.block_b, cross, which=closed)
+        # only the acting contacts' coupling blocks: an idle contact's zero block costs every solver iteration
+        system.add_off_diagonal(self.block_a, self.block_b, cross, which=acting)
 
 
 @njit(parallel=True, cache=True)

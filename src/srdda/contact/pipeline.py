@@ -18,6 +18,7 @@ by the shape types); docs/contacts.md gives the reason of each difference.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
@@ -125,6 +126,12 @@ class ContactSet:
 class ContactStep:
     """The contacts of one step attempt: springs, friction and the open-close iteration."""
 
+    line_search = False  # the open-close takes every solve whole
+
+    def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
+        """The whole solve (no line search)."""
+        return 1.0
+
     def __init__(self, record: ContactRecord, kind: ContactKind, params: ContactParameters,
                  response: JointResponse, law: ContactLaw, state: np.ndarray, direction: np.ndarray,
                  reference: np.ndarray, bonded: np.ndarray, normal_force: np.ndarray) -> None:
@@ -177,25 +184,30 @@ class ContactStep:
             tra[on_edge] = ctx.shape_at(a[on_edge], self.shear_points[0][on_edge])
         return ta, ctx.shape_at(b, r.point_b), tra, ctx.shape_at(b, self.shear_points[1])
 
-    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
+    def _springs_at(self, ctx: StepContext) -> ContactSprings:
+        """The springs' rows at the step's shapes (made again when the secant pass changes the shapes)."""
         r = self.record
-        a, b = r.block_a, r.block_b
-        if self._shapes is None or self._shapes_theta is not ctx.theta:  # the points are fixed in a step
+        if self._springs is None or self._shapes_theta is not ctx.theta:  # the points are fixed in a step
             self._shapes = self._shapes_at(ctx)
             self._shapes_theta = ctx.theta
             self._friction_rows = None
             ta, tb, tra, trb = self._shapes
             # the springs' unit rows n·T and e·T of every contact, whatever its state in the solves
-            self._springs = ContactSprings(a, b, directional_rows(r.normal, ta), directional_rows(r.normal, tb),
-                                           directional_rows(r.frame, tra), directional_rows(r.frame, trb), r.gap,
-                                           self.shear0, self.response.normal_stiffness,
-                                           self.response.shear_stiffness)
+            self._springs = ContactSprings(r.block_a, r.block_b, directional_rows(r.normal, ta),
+                                           directional_rows(r.normal, tb), directional_rows(r.frame, tra),
+                                           directional_rows(r.frame, trb), r.gap, self.shear0,
+                                           self.response.normal_stiffness, self.response.shear_stiffness)
+        return self._springs
+
+    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
+        r = self.record
+        a, b = r.block_a, r.block_b
+        springs = self._springs_at(ctx)
+        assert self._shapes is not None
         ta, tb, tra, _ = self._shapes
-        springs = self._springs
-        assert springs is not None
         self._solved_state = self.state.copy()  # the states of this solve's forces (for work)
         # by changes while the shapes stay those of the step (Shi's T at t, not the secant pass's)
-        springs.add_to(system, self.state, ctx.coeffs.c_p, by_changes=ctx.theta is None)
+        springs.add_to(system, self.state != OPEN, self.state == LOCKED, ctx.coeffs.c_p, by_changes=ctx.theta is None)
         sliding = self.state == SLIDING
         # Coulomb friction opposing the slip of x_a over b, N of an earlier solve (Shi 1988), on a's block
         self.applied = np.where(sliding[:, None],
@@ -215,22 +227,26 @@ class ContactStep:
             scatter_add(system.rhs, a[sliding], np.einsum("nki,nk->ni", ta[sliding], force))
             scatter_add(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tb[sliding], force))
 
-    def _moved(self, dd: np.ndarray) -> None:
-        """The gaps and shears after a solve with increments ``dd``."""
+    def _increments(self, dd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """How the gaps (n,) and shears (n, k) move with increments ``dd``: n·(T_a·Δd_a − T_b·Δd_b) and
+        e·(T_a(r_a)·Δd_a − T_b(r_b)·Δd_b)."""
         r = self.record
         assert self._shapes is not None and self._springs is not None
         if is_large(len(dd)):  # the springs' rows n·T, e·T times Δd: one compiled pass
-            normal_increment, shear_increment = self._springs.increments(dd)
-            self.gap = r.gap + normal_increment
-            self.shear = self.shear0 + shear_increment
-            return
-        # n·(T_a·Δd_a − T_b·Δd_b): the order of sums the paper's rows were made with
+            return self._springs.increments(dd)
+        # displacements first, then their components: the order of sums the paper's rows were made with
         ta, tb, tra, trb = self._shapes
         da, db = dd[r.block_a], dd[r.block_b]
         ua = np.einsum("nki,ni->nk", ta, da)
-        self.gap = r.gap + np.einsum("nk,nk->n", r.normal, ua - np.einsum("nki,ni->nk", tb, db))
         ura = ua if tra is ta else np.einsum("nki,ni->nk", tra, da)
-        self.shear = self.shear0 + np.einsum("nki,ni->nk", r.frame, ura - np.einsum("nki,ni->nk", trb, db))
+        return (np.einsum("nk,nk->n", r.normal, ua - np.einsum("nki,ni->nk", tb, db)),
+                np.einsum("nki,ni->nk", r.frame, ura - np.einsum("nki,ni->nk", trb, db)))
+
+    def _moved(self, dd: np.ndarray) -> None:
+        """The gaps and shears after a solve with increments ``dd``."""
+        normal_increment, shear_increment = self._increments(dd)
+        self.gap = self.record.gap + normal_increment
+        self.shear = self.shear0 + shear_increment
 
     def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         self._moved(dd)
@@ -413,6 +429,19 @@ class ContactModel:
         previous = previous if previous is not None else ContactSet.empty(record)
         old = match_previous(record.key, previous.key)
         kept = old >= 0
+        # contacts present at the start are bonded joints; ones formed later never are
+        bonded = np.full(len(record), first_step)
+        bonded[kept] = previous.bonded[old[kept]]
+        response = self.law.response(self.arrays.joints, record, bonded, self.params.stiffness)
+        normal_force = response.normal_stiffness * np.maximum(-record.gap, 0.0)
+        normal_force[kept] = previous.normal_force[old[kept]]
+        return self.start(record, previous, old, bonded, response, normal_force)
+
+    def start(self, record: ContactRecord, previous: ContactSet, old: np.ndarray, bonded: np.ndarray,
+              response: JointResponse, normal_force: np.ndarray) -> ContactStep:
+        """The step's contacts from what the last step's ``previous[old]`` knew (``old`` -1: a new contact):
+        the open-close's starting states and springs."""
+        kept = old >= 0
         src = old[kept]
         n, k = len(record), record.frame_width
         state = np.where(record.gap <= 0.0, LOCKED, OPEN).astype(np.int8)
@@ -439,10 +468,6 @@ class ContactModel:
         keep_reference = kept.copy()
         keep_reference[kept] = previous.state[src] == LOCKED
         reference[keep_reference] = previous.reference[old[keep_reference]]
-        # contacts present at the start are bonded joints; ones formed later never are
-        bonded = np.full(n, first_step)
-        bonded[kept] = previous.bonded[src]
-        response = self.law.response(self.arrays.joints, record, bonded, self.params.stiffness)
         # a sliding contact whose spring is dragged starts it stretched to its strength along its slip
         # direction (an elastic-plastic spring dragged along, Simo & Hughes 1998), so that if it locks
         # again it carries the friction force it had, not zero (docs/contacts.md)
@@ -450,8 +475,6 @@ class ContactModel:
         dragged[kept] &= previous.state[src] == SLIDING
         cap = response.friction[dragged] * previous.normal_force[old[dragged]] / response.shear_stiffness[dragged]
         reference[dragged] -= cap[:, None] * previous.direction[old[dragged]]
-        normal_force = response.normal_stiffness * np.maximum(-record.gap, 0.0)
-        normal_force[kept] = previous.normal_force[src]
         return ContactStep(record, self.kind, self.params, response, self.law, state, direction, reference, bonded,
                            normal_force)
 
@@ -478,6 +501,14 @@ class ContactTerm(Term):
     @property
     def at_points(self) -> bool:
         return self.step is not None
+
+    @property
+    def line_search(self) -> bool:
+        return self.step is not None and self.step.line_search
+
+    def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
+        assert self.step is not None
+        return self.step.step_length(dd_before, delta, curvature)
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         if self.step is not None:

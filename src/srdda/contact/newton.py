@@ -1,0 +1,343 @@
+"""The step's contact problem solved as one complementarity problem: Newton's method with a line search.
+
+With the contacts' penalty springs as their compliance, a step of the
+implicit DDA step equation A·Δd = F (every other term: inertia, elasticity,
+loads, springs, constraints) with contacts is the minimum of the step's
+incremental potential (docs/contacts.md, *The contact solve*)
+
+    Π(Δd) = ½ Δdᵀ A Δd − Fᵀ Δd + Σ_c [ ψ_n(g_c)/c_p + ψ_s(s_c)/c_p ],
+    g_c = g_0 + c_p n·(T_a Δd_a − T_b Δd_b),   s_c = s_e0 + c_p E·(T_a(r_a) Δd_a − T_b(r_b) Δd_b),
+
+c_p the scheme's penalty weight, over the feasible set of the constraint
+rows. ψ_n(g) = ½k_n·g² while the contact is compressed (or bonded, up to its
+tensile strength T: beyond, T·g), else 0;
+ψ_s is an elastic-perfectly plastic shear spring with the yield force τ =
+tan φ·N* + c·A (Tresca: N* the normal force of the last iterate, updated
+until it settles): ½k_s|s|² within τ/k_s, τ|s| − τ²/(2k_s) beyond (the
+spring's plastic slip is the part of s beyond τ/k_s, its dissipation τ·|slip|).
+Π is convex and once differentiable, so its minimum is the solution and
+Newton's method with a line search on Π reaches it:
+
+* each iterate assembles the contacts' linear model at the last iterate
+  (the active set: normal springs of the closed contacts, shear springs of
+  the sticking ones, the yield force τ·ŝ and, in 3D, the consistent tangent
+  (τ/|s|)(I − ŝŝᵀ) of the slipping ones) and the step solves the system;
+* the step length α along δ = Δd* − Δd_k is the full step where it
+  decreases Π enough (Armijo), else the backtracked one: Π(α) − Π(0) is
+  (½α² − α)·δᵀHδ plus, contact by contact, the true springs' potentials
+  less the linear model's, so a line search costs one block quadratic
+  form and passes over the contacts, no solve. A damped step stops short
+  of where a spring takes hold: the next model has the springs that act at
+  the full step already;
+* N* of the yield forces stays fixed while the active set settles (each
+  such problem is convex), then follows the solved normal forces; a contact
+  new in the step sticks until a solve gave it a normal force (Shi: a
+  contact that closes locks first);
+* it has converged when the full step was taken, no contact changed state
+  by more than the negligible force, and no sliding contact's normal force
+  (nor a sticking one's strength) moved by more than ``friction_tolerance``.
+
+A bonded contact carries tension up to its tensile strength and, sliding, its
+cohesion, both perfectly plastic within the step (so the problem stays
+convex); the bond breaks when the step is committed (the law's ``keeps_bond``:
+a contact that did not end the step locked loses it).
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
+from ..term import StepContext
+from .law import ContactLaw, JointResponse
+from .openclose import LOCKED, OPEN, SLIDING, magnitudes, negligible_force
+from .pipeline import ContactKind, ContactModel, ContactParameters, ContactSet, ContactStep
+from .record import ContactRecord
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+__all__ = ["NewtonContactModel", "NewtonContactStep", "ARMIJO", "MIN_STEP"]
+
+UNBOUNDED = 1e300  # the yield force of a contact whose normal force no solve has given yet (it sticks)
+ARMIJO = 1e-4  # a step must decrease Π by this fraction of what its slope at the start promises (Armijo)
+MIN_STEP = 1e-6  # the backtracking stops at this step length
+
+
+def _units(vectors: np.ndarray) -> np.ndarray:
+    """v/|v| row by row (zero rows stay zero)."""
+    size = magnitudes(vectors)
+    return np.where(size[:, None] > 0.0, vectors / np.where(size > 0.0, size, 1.0)[:, None], 0.0)
+
+
+class NewtonContactStep(ContactStep):
+    """The contacts of one step attempt as one complementarity problem (module doc)."""
+
+    line_search = True
+
+    def __init__(self, record: ContactRecord, kind: ContactKind, params: ContactParameters,
+                 response: JointResponse, law: ContactLaw, state: np.ndarray, direction: np.ndarray,
+                 reference: np.ndarray, bonded: np.ndarray, normal_force: np.ndarray, known: np.ndarray) -> None:
+        """``known``: the contacts whose normal force the last step gave (the others stick until a solve has)."""
+        super().__init__(record, kind, params, response, law, state, direction, reference, bonded, normal_force)
+        # the linear model of the next solve: normal springs, sticking shear springs, slipping yield forces
+        self.normal_on = state != OPEN
+        self.stick = state == LOCKED
+        self.slip = ~self.stick  # an open contact's spring slips too: at a yield force of zero once N* is
+        self.normal_star = normal_force.copy()  # N* of the yield forces (Tresca)
+        # a contact new in this step has no normal force yet: it sticks until a solve gave it one (Shi: a
+        # contact that closes locks first)
+        self.known = known.copy()
+        self.slip_direction = direction.copy()  # ŝ of the slipping contacts' linear model
+        self.slip_shear = self.shear0.copy()  # the effective shear the slipping contacts' tangent was taken at
+        self.step_lengths: list[float] = []  # α of every solve's line search
+        self._stiffer: tuple[np.ndarray, np.ndarray] | None = None  # springs acting at a damped solve's full step
+        self.follow_normal_force = True  # False: N* stays as given (the Tresca problem alone: tests)
+        self._c_p = 1.0  # the scheme's penalty weight (set by add_to)
+
+    # -- the contact model ---------------------------------------------------
+    def yield_force(self) -> np.ndarray:
+        """τ (n,) of the shear springs: tan φ·N* + c·A (Tresca); unbounded while N* is not known."""
+        return np.where(self.known, self.response.strength(np.maximum(self.normal_star, 0.0)), UNBOUNDED)
+
+    def _forces(self, gap: np.ndarray, shear: np.ndarray, model: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The springs' forces (γ_n (n,), γ_s (n, k): ∂ψ/∂g, ∂ψ/∂s) at effective gaps and shears, of the
+        true functions or (``model``) of the linear model the last solve was assembled with."""
+        kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
+        tau = self.yield_force()
+        tension = self.response.tension
+        if model:
+            normal = np.where(self.normal_on, kn * gap, tension)
+            sliding = self.slip[:, None]
+            tangent = self._tangent_stiffness(tau)[:, None] * self._across(shear)
+            shear_force = np.where(self.stick[:, None], ks[:, None] * shear,
+                                   np.where(sliding, tau[:, None] * self.slip_direction + tangent, 0.0))
+            return normal, shear_force
+        normal = np.minimum(kn * gap, tension)
+        trial = ks[:, None] * shear
+        size = magnitudes(trial)
+        within = size <= tau
+        return normal, np.where(within[:, None], trial, tau[:, None] * _units(shear))
+
+    def _tangent_stiffness(self, tau: np.ndarray) -> np.ndarray:
+        """τ/|s| of the slipping contacts' consistent tangent across ŝ (3D; zero for k = 1: no direction
+        across the slip in 2D)."""
+        if self.record.frame_width == 1:
+            return np.zeros(len(tau))
+        size = magnitudes(self.slip_shear)
+        turning = self.slip & (size > 0.0) & np.any(self.slip_direction != 0.0, axis=1)
+        return np.where(turning, tau / np.where(size > 0.0, size, 1.0), 0.0)
+
+    def _across(self, shear: np.ndarray) -> np.ndarray:
+        """(I − ŝŝᵀ)s: the part of the shears across the slip directions of the linear model."""
+        along = np.einsum("nk,nk->n", shear, self.slip_direction)
+        return shear - along[:, None] * self.slip_direction
+
+    # -- a solve -------------------------------------------------------------
+    def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
+        r = self.record
+        springs = self._springs_at(ctx)
+        c_p = ctx.coeffs.c_p
+        self._c_p = c_p
+        springs.add_to(system, self.normal_on, self.stick, c_p, by_changes=ctx.theta is None)
+        capped = np.flatnonzero(~self.normal_on & (self.response.tension > 0.0))
+        if len(capped):  # bonded contacts pulled to their tensile strength: the constant force T along n
+            pull = self.response.tension[capped]
+            scatter_add(system.rhs, r.block_a[capped], -pull[:, None] * springs.normal_a[capped])
+            scatter_add(system.rhs, r.block_b[capped], pull[:, None] * springs.normal_b[capped])
+        self.slip_shear = self.shear0 + c_p * (self.shear - self.shear0)  # the effective shear of the iterate
+        if not np.any(self.slip):
+            return
+        # the slipping contacts: the yield force τ·ŝ on a (its reverse on b) through the shear rows, and in 3D
+        # the consistent tangent as a spring of stiffness τ/|s| across ŝ
+        tau = self.yield_force()
+        sl = np.flatnonzero(self.slip)
+        force = -tau[sl, None] * self.slip_direction[sl]
+        scatter_add(system.rhs, r.block_a[sl], np.einsum("nk,nki->ni", force, springs.shear_a[sl]))
+        scatter_add(system.rhs, r.block_b[sl], -np.einsum("nk,nki->ni", force, springs.shear_b[sl]))
+        stiffness = self._tangent_stiffness(tau)[sl]
+        if np.any(stiffness > 0.0):
+            across = np.stack([-self.slip_direction[sl, 1], self.slip_direction[sl, 0]], axis=1)  # ŝ turned 90°
+            rows_a = np.einsum("nk,nki->ni", across, springs.shear_a[sl])[:, None]
+            rows_b = np.einsum("nk,nki->ni", across, springs.shear_b[sl])[:, None]
+            gap = np.einsum("nk,nk->n", across, self.shear0[sl])[:, None]
+            add_penalty_pairs(system, PenaltyPairs(r.block_a[sl], rows_a, r.block_b[sl], rows_b, gap, stiffness),
+                              c_p)
+
+    def _potentials(self, gap: np.ndarray, shear: np.ndarray, model: bool) -> float:
+        """Σ ψ of the springs at effective gaps and shears (up to a constant), of the true functions or of the
+        linear model the last solve was assembled with (the integrals of :meth:`_forces`)."""
+        kn, ks, tension = self.response.normal_stiffness, self.response.shear_stiffness, self.response.tension
+        tau = self.yield_force()
+        if model:
+            normal = np.where(self.normal_on, 0.5 * kn * gap**2, tension * gap)
+            across = self._across(shear)
+            slip = np.einsum("nk,nk->n", shear, self.slip_direction) * tau \
+                + 0.5 * self._tangent_stiffness(tau) * np.einsum("nk,nk->n", across, across)
+            shear_energy = np.where(self.stick, 0.5 * ks * np.einsum("nk,nk->n", shear, shear),
+                                    np.where(self.slip, slip, 0.0))
+            return float(np.sum(normal) + np.sum(shear_energy))
+        capped = kn * gap > tension
+        normal = np.where(capped, tension * gap - 0.5 * tension**2 / kn, 0.5 * kn * gap**2)
+        size = magnitudes(shear)
+        limit = tau / ks
+        shear_energy = np.where(size <= limit, 0.5 * ks * size**2, tau * size - 0.5 * tau * limit)
+        return float(np.sum(normal) + np.sum(shear_energy))
+
+    def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
+        """α in (0, 1] along Δd_k + α·δ that decreases Π enough (Armijo, backtracking); ``curvature()`` gives
+        δᵀHδ. The full step is tried first: near the solution it is taken (Newton's fast convergence)."""
+        gap_k, shear_k = self.record.gap, self.shear0
+        dn0, ds0 = self._increments(dd_before)
+        dn, ds = self._increments(delta)
+        c_p = self._c_p
+
+        def along(alpha: float) -> tuple[np.ndarray, np.ndarray]:
+            return gap_k + c_p * (dn0 + alpha * dn), shear_k + c_p * (ds0 + alpha * ds)
+
+        gap0, shear0 = along(0.0)
+        true_n, true_s = self._forces(gap0, shear0, model=False)
+        lin_n, lin_s = self._forces(gap0, shear0, model=True)
+        c = curvature()
+        slope0 = -c + float(np.dot(true_n - lin_n, dn) + np.sum((true_s - lin_s) * ds))
+        alpha = 1.0
+        if slope0 < 0.0:  # a descent direction (not so, at most, the first solve's predicted states: taken whole)
+            base = self._potentials(gap0, shear0, False) - self._potentials(gap0, shear0, True)
+
+            def rise(alpha: float) -> float:  # Π(α) − Π(0)
+                gap, shear = along(alpha)
+                contacts = self._potentials(gap, shear, False) - self._potentials(gap, shear, True) - base
+                return (0.5 * alpha**2 - alpha) * c + contacts / c_p
+
+            value = rise(alpha)
+            while value > ARMIJO * alpha * slope0 and alpha > MIN_STEP:
+                # the minimum of the quadratic through Π(0), Π'(0) and Π(α), kept within [α/10, α/2]
+                guess = -slope0 * alpha**2 / (2.0 * (value - slope0 * alpha))
+                alpha = min(max(guess, 0.1 * alpha), 0.5 * alpha)
+                value = rise(alpha)
+        if alpha < 1.0:
+            # a damped step stops short of where a spring takes hold: the next model has the springs that act
+            # at the full step already (a contact closed, a shear spring sticking), or it would stop short again
+            gap1, shear1 = along(1.0)
+            self._stiffer = (self.response.normal_stiffness * gap1 < self.response.tension,
+                             self.response.shear_stiffness * magnitudes(shear1) <= self.yield_force())
+        self.step_lengths.append(alpha)
+        return alpha
+
+    def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
+        self._moved(dd)
+        r, p = self.record, self.params
+        c_p = ctx.coeffs.c_p
+        gap = r.gap + c_p * (self.gap - r.gap)
+        shear = self.shear0 + c_p * (self.shear - self.shear0)
+        kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
+        compression = np.maximum(-kn * gap, 0.0)
+        self._force_limit = negligible_force(ctx.arrays.block_mass, ctx.arrays.gravity, r.block_a, r.block_b,
+                                             compression, p.force_tolerance)
+        # a bonded contact carries tension up to its tensile strength (beyond, that force), a sliding one the
+        # cohesion: both perfectly plastic within the step, so that the step's problem stays convex; the bond
+        # then breaks when the step is committed (ContactLaw.keeps_bond)
+        tau = self.yield_force()
+        trial = ks * magnitudes(shear)
+        normal_on = kn * gap < self.response.tension
+        stick = trial <= tau
+        if self._stiffer is not None:
+            normal_on, stick = normal_on | self._stiffer[0], stick | self._stiffer[1]
+            self._stiffer = None
+        slip = ~stick
+        # where the true springs' forces differ from the model's by more than the negligible force, another solve
+        true_n, true_s = self._forces(gap, shear, model=False)
+        model_n, model_s = self._forces(gap, shear, model=True)
+        changed_normal = np.abs(true_n - model_n) > self._force_limit
+        changed_shear = magnitudes(true_s - model_s) > self._force_limit
+        full_step = not self.step_lengths or self.step_lengths[-1] == 1.0
+        settled_states = full_step and not np.any(changed_normal | changed_shear)
+        # Tresca: the yield forces' N* stay fixed while the active set settles (each such problem is convex, the
+        # line search on its Π converges), then follow the solved normal forces until these settle too
+        acts = (self.response.friction > 0.0) & normal_on
+        off = np.abs(compression - self.normal_star) > np.maximum(p.friction_tolerance * compression,
+                                                                  self._force_limit)
+        would_slip = trial > self.response.strength(compression) + self._force_limit
+        unsettled_friction = acts & ((slip & off) | (stick & would_slip)) & self.follow_normal_force
+        done = settled_states and not np.any(unsettled_friction)
+        changed = changed_normal | changed_shear | (unsettled_friction if settled_states else False)
+        self.unsettled_pairs = np.column_stack([r.block_a[changed], r.block_b[changed]])
+        self.normal_on, self.stick, self.slip = normal_on, stick, slip
+        self.slip_direction = np.where(slip[:, None], _units(shear), 0.0)
+        if self.follow_normal_force and (settled_states or not np.all(self.known)):
+            self.normal_star = compression
+        self.known[:] = True
+        self.normal_force = -np.minimum(kn * gap, self.response.tension)
+        self.state = np.where(normal_on, np.where(stick, LOCKED, SLIDING), OPEN).astype(np.int8)
+        self.iterations += 1
+        return done
+
+    # -- after the step ------------------------------------------------------
+    def elastic_shear(self, shear: np.ndarray) -> np.ndarray:
+        """The springs' elastic stretch s_e (n, k): s within τ/k_s, else τ/k_s along s (the return map)."""
+        ks = self.response.shear_stiffness
+        tau = self.yield_force()
+        limit = tau / ks
+        return np.where((magnitudes(shear) <= limit)[:, None], shear, limit[:, None] * _units(shear))
+
+    def commit(self) -> ContactSet:
+        """The contacts as they ended the accepted step: the shear springs' references moved by their plastic
+        slip, so that each spring carries its elastic stretch into the next step."""
+        r = self.record
+        c_p = self._c_p
+        shear = self.shear0 + c_p * (self.shear - self.shear0)
+        elastic = self.elastic_shear(shear)
+        reference = self.reference + r.reference_shift(elastic - shear)
+        energy = self.stored_energy()
+        ks = self.response.shear_stiffness
+        return ContactSet(r.key, r.features, r.block_a, r.block_b, self.state.copy(), self.slip_direction.copy(),
+                          reference, self.law.keeps_bond(self.bonded, self.state), self.normal_force.copy(),
+                          np.where((self.state != OPEN)[:, None], -ks[:, None] * elastic, 0.0), self.gap.copy(),
+                          elastic, r.joint, r.point_a, r.point_b, r.normal, energy)
+
+    def _held_in_band(self) -> np.ndarray:
+        """No band here: a contact is closed exactly where it is compressed or bonded."""
+        return np.zeros(len(self.state), dtype=bool)
+
+    def stored_energy(self) -> float:
+        """J (per m in 2D) the springs keep: ½k_n g² of the closed contacts, ½k_s|s_e|² of every closed contact's
+        shear spring (a slipping one holds its stretch at the yield force)."""
+        r = self.record
+        c_p = getattr(self, "_c_p", 1.0)
+        gap = r.gap + c_p * (self.gap - r.gap)
+        elastic = self.elastic_shear(self.shear0 + c_p * (self.shear - self.shear0))
+        closed = self.state != OPEN
+        kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
+        return 0.5 * float(np.sum((kn * gap**2)[closed])) + 0.5 * float(np.sum((ks[:, None] * elastic**2)[closed]))
+
+    def work(self, dd: np.ndarray, c_p: float) -> tuple[float, float]:
+        """(friction, springs): minus the plastic dissipation τ·|slip| of the step, and the work of every
+        contact force (normal springs, shear springs at their yield force) over the step's increments."""
+        r = self.record
+        dn, ds = self._increments(dd)
+        gap = r.gap + c_p * dn
+        shear = self.shear0 + c_p * ds
+        normal, shear_force = self._forces(gap, shear, model=False)
+        springs = -float(np.dot(normal, dn)) - float(np.sum(shear_force * ds))
+        plastic = magnitudes(shear - self.elastic_shear(shear))
+        friction = -float(np.sum(self.yield_force() * plastic)) / c_p
+        return friction, springs - friction
+
+
+class NewtonContactModel(ContactModel):
+    """The contacts of a model solved by :class:`NewtonContactStep` (``contact_solver = "newton"``)."""
+
+    def start(self, record: ContactRecord, previous: ContactSet, old: np.ndarray, bonded: np.ndarray,
+              response: JointResponse, normal_force: np.ndarray) -> ContactStep:
+        """A kept contact predicts the state it ended the last step in and keeps its spring's material points
+        (its elastic stretch); a new one is predicted closed where it penetrates, its spring unstretched."""
+        kept = old >= 0
+        state = np.where(record.gap <= 0.0, LOCKED, OPEN).astype(np.int8)
+        state[kept] = previous.state[old[kept]]
+        direction = np.zeros((len(record), record.frame_width))
+        direction[kept] = previous.direction[old[kept]]
+        reference = record.start_reference.copy()
+        reference[kept] = previous.reference[old[kept]]
+        return NewtonContactStep(record, self.kind, self.params, response, self.law, state, direction, reference,
+                                 bonded, normal_force, kept)
