@@ -61,13 +61,20 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     advice = time_step_advice(arrays, settings)
     if advice is not None:
         warnings.warn(advice, TimeStepWarning, stacklevel=2)
-    energy = energies(stepper.terms, arrays, state)
-    record(state, 0, energy)
-    # contacts must never create energy; dda0's and dda1's rotation artefacts (the paper's Tables 1-5) do
-    watch = EnergyWatch(energy) if any(t.energy_kind == "contact" for t in stepper.terms) else None
     summary = WarningSummary()
-    with blas_threads_for_steps():
-        status, state = _steps(stepper, settings, state, record, watch, progress, stop, summary)
+    try:
+        energy = energies(stepper.terms, arrays, state)
+        record(state, 0, energy)
+        # contacts must never create energy; dda0's and dda1's rotation artefacts (the paper's Tables 1-5) do
+        watch = EnergyWatch(energy) if any(t.energy_kind == "contact" for t in stepper.terms) else None
+        with blas_threads_for_steps():
+            status, state = _steps(stepper, settings, state, record, watch, progress, stop, summary)
+    except BaseException as exc:  # Ctrl-C, an error: a recorder that holds something lets it go
+        for sink in sinks:
+            abandon = getattr(sink, "abandon", None)
+            if abandon is not None:
+                abandon(f"interrupted ({type(exc).__name__})")
+        raise
     for sink in sinks:
         sink.finish(status, state)
     summary.emit()

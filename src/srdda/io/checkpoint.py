@@ -9,6 +9,9 @@ this module knowing them:
 * a field holding a dataclass (e.g. a contact set) is flattened into
   ``f.<subfield>`` datasets as above, with ``f__present`` (bool per
   checkpoint; False for None) whose attr ``class`` names the dataclass;
+* every dataset carries HDF5's Fletcher32 checksum and the class names their
+  CRC-32 (:mod:`srdda.io.integrity`); :func:`intact_checkpoints` tells which
+  checkpoints read back whole;
 * ``step`` and ``time`` are appended last: a checkpoint counts only when every
   per-checkpoint dataset (``step``, ``time``, ``*__count``, ``*__present``)
   has its row, so one cut short by a kill is ignored. A writer may append
@@ -23,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import json
 from typing import Any
 
 import h5py
@@ -30,9 +34,10 @@ import numpy as np
 
 from ..geometry.polygon import BlockMoments
 from ..geometry.polyhedron import PolyhedronMoments
+from .integrity import Rows, ordered_prefix, read_attr, read_intact, read_text, write_text
 
 __all__ = ["append_checkpoint", "commit_checkpoint", "checkpoint_count", "increasing_prefix", "truncate_checkpoints",
-           "read_checkpoint"]
+           "read_checkpoint", "intact_checkpoints"]
 
 SKIPPED = ("step", "time", "moments")
 
@@ -56,7 +61,7 @@ def _append(group: h5py.Group, name: str, rows: np.ndarray) -> None:
         row_bytes = max(1, int(np.prod(row, dtype=np.int64)) * rows.dtype.itemsize)
         chunk = int(max(1, min(max(len(rows), 16), (1 << 20) // row_bytes)))
         group.create_dataset(name, shape=(0, *row), maxshape=(None, *(d if d else None for d in row)),
-                             dtype=rows.dtype, chunks=(chunk, *(max(d, 1) for d in row)))
+                             dtype=rows.dtype, chunks=(chunk, *(max(d, 1) for d in row)), fletcher32=True)
     ds = group[name]
     n = ds.shape[0]
     ds.resize(n + len(rows), axis=0)
@@ -76,7 +81,7 @@ def append_checkpoint(group: h5py.Group, state: Any, commit: bool = True) -> Non
 
     ``commit=False`` leaves out its ``step`` row (:func:`commit_checkpoint`): until then it does not count.
     """
-    group.attrs["state_class"] = _class_path(state)
+    write_text(group, "state_class", _class_path(state))
     for f in dataclasses.fields(state):
         if f.name in SKIPPED:
             continue
@@ -85,12 +90,13 @@ def append_checkpoint(group: h5py.Group, state: Any, commit: bool = True) -> Non
             present = f"{f.name}__present"
             _append(group, present, np.array([value is not None]))
             if value is not None:
-                group[present].attrs["class"] = _class_path(value)
+                write_text(group[present], "class", _class_path(value))
                 for g in dataclasses.fields(value):
                     _append_value(group, f"{f.name}.{g.name}", getattr(value, g.name))
         else:
             _append_value(group, f.name, value)
     _append(group, "time", np.array([state.time], dtype=float))
+    write_text(group, "datasets", json.dumps(sorted(group)))  # what a damaged file would lack
     if commit:
         commit_checkpoint(group, state)
 
@@ -133,16 +139,70 @@ def truncate_checkpoints(group: h5py.Group, n: int) -> None:
         group[k[: -len("__count")]].resize(int(np.sum(group[k][()])), axis=0)
 
 
+def intact_checkpoints(group: h5py.Group) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """The steps of the complete checkpoints, which of them read back whole, and what is damaged.
+
+    A checkpoint reads back whole when every row it needs (its own rows and the
+    counts that locate them) lies outside the chunks that fail, and every
+    dataset the group's list (attribute ``datasets``) names is there.
+    """
+    missing = []
+    if "datasets" in group.attrs:  # a missing dataset: no checkpoint can be restored whole
+        missing = [f"{group.name}/{name} is missing" for name in json.loads(read_text(group, "datasets"))
+                   if name not in group]
+    problems = list(missing)
+    if "step" not in group:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool), problems
+    rows: dict[str, Rows] = {}
+    for name in group:  # the arrays' rows are checked, not kept; the per-checkpoint rows are needed
+        small = name in ("step", "time") or name.endswith(("__count", "__present"))
+        rows[name] = read_intact(group, name, keep=small)
+    per = _per_checkpoint(group)
+    n = min(rows[k].good for k in per)  # the counts and steps are read up to their first damage
+    n, damaged = ordered_prefix(rows["step"].data[:n])
+    if damaged:
+        problems.append(f"{group.name}/step out of order at row {n}")
+    intact = np.full(n, not missing)
+    lost: set[str] = set()  # datasets whose damage costs a complete checkpoint
+    for name in [k for k in group if k.endswith("__count") and "." not in k]:
+        field = name[: -len("__count")]
+        whole = _readable(rows[field], np.cumsum(rows[name].data[:n]))
+        lost |= {field} if not whole.all() else set()
+        intact &= whole
+    for present in [k for k in group if k.endswith("__present")]:
+        shown = rows[present].data[:n].astype(bool)
+        index = np.cumsum(shown) - 1  # the row of each checkpoint's value among the present ones
+        prefix = present[: -len("__present")] + "."
+        for count in [k for k in group if k.startswith(prefix) and k.endswith("__count")]:
+            field = count[: -len("__count")]
+            whole = _readable(rows[field], np.cumsum(rows[count].data[:rows[count].good]))
+            readable = np.zeros(n, dtype=bool)
+            within = shown & (index < len(whole))
+            readable[within] = whole[index[within]]
+            lost |= {field} if np.any(shown & ~readable) else set()
+            intact &= ~shown | readable
+    complete = min(group[k].shape[0] for k in per)
+    problems += [r.problem for k, r in rows.items() if r.problem is not None and (
+        k in lost or (k in per and r.good < complete) or "cannot be read" in r.problem)]
+    return rows["step"].data[:n], intact, problems
+
+
+def _readable(rows: Rows, ends: np.ndarray) -> np.ndarray:
+    """Which of the values ending at ``ends`` (cumulated counts) in ``rows`` read back whole."""
+    starts = np.concatenate([[0], ends[:-1]]) if len(ends) else ends
+    return np.array([rows.intact(int(a), int(b)) for a, b in zip(starts, ends)], dtype=bool)
+
+
 def _read_value(group: h5py.Group, name: str, index: int) -> Any:
     counts = group[f"{name}__count"][: index + 1]
     start = int(np.sum(counts[:-1]))
     value = group[name][start:start + int(counts[-1])]
-    return value[0] if group[name].attrs.get("scalar", False) else value
+    return value[0] if read_attr(group[name], "scalar", False) else value
 
 
 def read_checkpoint(group: h5py.Group, index: int, moments: Any) -> Any:
     """The State of checkpoint ``index``; ``moments(vertices) -> BlockMoments`` recomputes the integrals."""
-    cls = _import(str(group.attrs["state_class"]))
+    cls = _import(read_text(group, "state_class"))
     kwargs: dict[str, Any] = {"step": int(group["step"][index]), "time": float(group["time"][index])}
     for f in dataclasses.fields(cls):
         if f.name in SKIPPED:
@@ -152,7 +212,7 @@ def read_checkpoint(group: h5py.Group, index: int, moments: Any) -> Any:
             if not group[present][index]:
                 kwargs[f.name] = None
                 continue
-            sub = _import(str(group[present].attrs["class"]))
+            sub = _import(read_text(group[present], "class"))
             j = int(np.sum(group[present][:index]))  # its rows are those of the present values only
             kwargs[f.name] = sub(**{g.name: _read_value(group, f"{f.name}.{g.name}", j)
                                     for g in dataclasses.fields(sub)})
