@@ -80,7 +80,7 @@ class CutShortFile(io.RawIOBase):
 
 def describe_error(exc: BaseException) -> str:
     """An h5py error in a few words: the reason HDF5 gives (in parentheses at the end), else the first line."""
-    text = (str(exc).splitlines() or [type(exc).__name__])[0]
+    text = (str(exc).strip("'\"").splitlines() or [type(exc).__name__])[0]  # a KeyError's text comes quoted
     if "(" in text and text.endswith(")"):
         reason = text[text.rindex("(") + 1:-1]
         return {"incorrect metadata checksum after all read attempts": "its metadata fails its checksum",

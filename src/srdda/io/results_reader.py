@@ -124,7 +124,11 @@ def read_header(f: h5py.File, path: str | Path) -> Header:
             raise DamagedError(f"the attribute 'method' of / is {method!r}, not a method")
         last_step = _int_attr(f, "last_step", -1)
         flush_every, contact_every = _int_attr(f, "flush_every", 1), _int_attr(f, "contact_every", 1)
-        settings = RunSettings(**read_json(f["settings"], "json", dict))
+        try:
+            group = f["settings"]
+        except READ_ERRORS as exc:
+            raise DamagedError(f"/settings cannot be read ({_what(exc)})") from None
+        settings = RunSettings(**read_json(group, "json", dict))
     except ValidationError as exc:
         raise _damaged(path, f"the run settings in /settings ({exc.errors()[0]['msg']})") from None
     except READ_ERRORS as exc:
