@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import srdda
+from srdda.io.integrity import write_text
 from srdda.io.checkpoint import append_checkpoint, checkpoint_count, read_checkpoint, truncate_checkpoints
 from srdda.io.results_store import ResultsStore, contacts_from_state, read_results
 from srdda.ledger import ENERGY_NAMES
@@ -134,7 +135,7 @@ def test_a_checkpoint_of_a_field_this_state_lacks_is_refused(tmp_path: Path) -> 
     with h5py.File(tmp_path / "c.h5", "w") as f:
         g = f.create_group("checkpoint")
         append_checkpoint(g, _states(2)[1])
-        g.attrs["state_class"] = "srdda.state:State"
+        write_text(g, "state_class", "srdda.state:State")
         with pytest.raises(ValueError, match="contacts"):
             read_checkpoint(g, 0, two_block_model().arrays().moments)
 

@@ -280,12 +280,13 @@ def test_the_cutting_section_of_a_model_file_builds_the_cut_blocks():
     from srdda.io.modelfile import ModelFileError, model_from_dict
 
     data = tomllib.loads(_CUT_FILE)
-    model, _ = model_from_dict(data, "cut.toml")
     parts = [convex_hull_polyhedron(data["cutting"]["domain"][0]["vertices"]), box((0, 0, -5), (40, 20, 0))]
     sets = [JointSet3D(35, 270, 3.0, kappa=40)]
     points = np.concatenate([p[0] for p in parts])
     disc = JointPlanes.of(plane_normal(60, 90), [20, 10, 10], 30.0)
     cut = cut_polyhedra(parts, JointPlanes.concatenate([joint_planes(points, sets, seed=4), disc]))
+    data["measured_points"][0]["at"] = cut.centroids()[3].tolist()  # a point of the block it names (issue 32)
+    model, _ = model_from_dict(data, "cut.toml")
     assert len(model.blocks) == cut.n_blocks > 10
     assert [b.name for b in model.blocks[:2]] == ["cut 0", "cut 1"]
     assert np.array_equal(np.concatenate([b.vertices for b in model.blocks]), cut.vertices)

@@ -166,6 +166,27 @@ def test_resume_refuses_another_spec(reference: Path, tmp_path: Path) -> None:
         run_ensemble(spec, out, workers=1, processes=False, progress=False)
 
 
+def test_a_second_ensemble_into_a_held_folder_fails_naming_the_first(reference: Path, tmp_path: Path) -> None:
+    # issue 32: two `srdda ensemble` runs into one --out both ran; the folder is now held like a run's output
+    from srdda.io.outputlock import release_lock, take_lock
+
+    out = tmp_path / "out"
+    shutil.copytree(reference, out)
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    lock = out / "ensemble.lock"
+    held = take_lock(lock, str(out))  # what a running `srdda ensemble --out out` holds
+    try:
+        result = CliRunner().invoke(main, ["ensemble", str(write_spec(tmp_path)), "--out", str(out), "--workers", "1",
+                                           "--quiet"])
+        assert result.exit_code == 1 and "Traceback" not in result.output, result.output
+        assert f"{out} is being written by another run (pid {os.getpid()} on " in result.output
+        assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p != lock} == before  # untouched
+    finally:
+        release_lock(lock, held)
+    done = run_ensemble(write_spec(tmp_path), out, workers=1, processes=False, progress=False)
+    assert (done.ran, done.resumed) == (0, 6) and not lock.exists()  # released: usable again, no lock left
+
+
 def test_zero_variance_reproduces_the_single_run(tmp_path: Path) -> None:
     spec_text = SPEC.replace("std = 0.5", "std = 0.0").replace("low = 25.0\nhigh = 40.0", "low = 35.0\nhigh = 35.0")
     spec_text += ('\n[[parameters]]\nname = "dx"\nshortcut = "release_dx"\ndistribution = "normal"\nmean = 0.0\n'

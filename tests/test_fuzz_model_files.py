@@ -1,10 +1,14 @@
-"""Fuzzing the model-file reader: no mutated file ends in a traceback (issue 15).
+"""Fuzzing the model-file reader: no mutated file ends in a traceback (issues 15 and 32).
 
-Valid model files (the paper's, the cutting and 3D examples) are mutated with
-a fixed seed: bytes flipped, lines dropped or duplicated, numbers replaced by
-extreme or non-finite values, keys renamed, the file truncated. ``srdda check``
-must answer every one with exit 0 (still valid) or 2 and one message, never an
-exception. ``make test`` runs 150 mutants (a few seconds); the slow run 600.
+Valid model files (the paper's, the cutting, constraint and 3D examples) are
+mutated with a fixed seed: bytes flipped, lines dropped or duplicated, numbers
+replaced by extreme, non-finite, boolean or over-long values, keys renamed, the
+file truncated. ``srdda check`` must answer every one with exit 0 (still valid)
+or 2 and one message, never an exception; and a mutant that ``check`` accepts
+must run (two steps) to exit 0 or 3 (diverged), never to a usage error or an
+exception: ``check`` finds what ``run`` cannot do. ``make test`` runs 150
+mutants (seconds); the slow test 600; ``tests/fuzz_full.py`` 1,000 and more
+(docs/reliability.md gives its last figures).
 """
 from __future__ import annotations
 
@@ -19,9 +23,13 @@ from srdda.cli import main
 from srdda.paper import examples_dir
 
 ROOT = Path(__file__).resolve().parents[1]
-SOURCES = sorted((examples_dir() / "paper").glob("*.toml")) + [ROOT / "examples" / "solid" / "hinged-boxes.toml",
-                                                               ROOT / "examples" / "cutting" / "tunnel.toml"]
-NUMBERS = ["0", "-1", "1e300", "-1e300", "1e-300", "nan", "inf", "-inf", "1e23", "3.5", "\"x\"", "[]", "true"]
+SOURCES_2D = sorted((examples_dir() / "paper").glob("*.toml")) + [
+    ROOT / "examples" / "cutting" / "tunnel.toml", ROOT / "examples" / "constraints" / "hinged-wall.toml"]
+SOURCES_3D = [ROOT / "examples" / "solid" / name for name in ("hinged-boxes.toml", "cube-drop.toml", "wedge-fs0.8.toml",
+                                                              "incline.toml")]
+SOURCES = SOURCES_2D + SOURCES_3D
+NUMBERS = ["0", "-1", "1e300", "-1e300", "1e-300", "nan", "inf", "-inf", "1e23", "3.5", "\"x\"", "[]", "true", "false",
+           "9" * 5000]
 
 
 def _mutant(text: str, rng: random.Random) -> bytes:
@@ -50,25 +58,43 @@ def _mutant(text: str, rng: random.Random) -> bytes:
     return "\n".join(lines).encode()
 
 
-def _check_mutants(tmp_path: Path, count: int, seed: int) -> None:
+def check_mutants(folder: Path, count: int, seed: int) -> tuple[dict[str, int], list[tuple[str, ...]]]:
+    """Check ``count`` mutants (seed ``seed``); run the ones check accepts.
+
+    Returns how they ended (counts by outcome) and the failures: the mutants
+    that ended in an exception or a traceback, or that check accepted and the
+    run refused.
+    """
     rng = random.Random(seed)
     runner = CliRunner()
-    failures = []
+    failures, outcomes = [], {}
     for k in range(count):
         source = rng.choice(SOURCES)
-        path = tmp_path / f"m{k}.toml"
+        path = folder / f"m{k}.toml"
+        path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(_mutant(source.read_text(encoding="utf-8"), rng))
         result = runner.invoke(main, ["check", str(path)])
-        if result.exit_code not in (0, 2) or (result.exception is not None and not isinstance(result.exception,
-                                                                                               SystemExit)):
-            failures.append((source.name, path.read_bytes()[:200], repr(result.exception), result.output[-300:]))
-    assert not failures, f"{len(failures)} of {count} mutants ended in a traceback: {failures[:3]}"
+        outcome = f"{'3D' if source in SOURCES_3D else '2D'} check {result.exit_code}"
+        bad = result.exit_code not in (0, 2)
+        if result.exit_code == 0:
+            result = runner.invoke(main, ["run", str(path), "--steps", "2", "--out", str(folder / f"o{k}"), "--quiet"])
+            outcome += f", run {result.exit_code}"
+            bad = result.exit_code not in (0, 3)
+        bad = bad or (result.exception is not None and not isinstance(result.exception, SystemExit))
+        if bad or "Traceback" in result.output:
+            failures.append((source.name, str(path.read_bytes()[:200]), repr(result.exception), result.output[-300:]))
+        outcomes[outcome] = outcomes.get(outcome, 0) + 1
+    return outcomes, failures
 
 
 def test_mutated_model_files_never_end_in_a_traceback(tmp_path):
-    _check_mutants(tmp_path, 150, seed=1)
+    outcomes, failures = check_mutants(tmp_path, 150, seed=1)
+    assert not failures, f"{len(failures)} of 150 mutants failed: {failures[:3]}"
+    assert sum(n for o, n in outcomes.items() if o.startswith("3D")) > 20  # both kinds of model are fuzzed
+    assert sum(n for o, n in outcomes.items() if "run 0" in o) > 20  # and runs of the mutants check accepts
 
 
 @pytest.mark.slow
 def test_many_mutated_model_files_never_end_in_a_traceback(tmp_path):
-    _check_mutants(tmp_path, 600, seed=2)
+    _, failures = check_mutants(tmp_path, 600, seed=2)
+    assert not failures, f"{len(failures)} of 600 mutants failed: {failures[:3]}"

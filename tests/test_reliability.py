@@ -12,7 +12,7 @@ from click.testing import CliRunner, Result as CliResult
 
 import srdda
 from srdda.cli import main
-from srdda.io import results_store
+from srdda.io import outputlock, results_store
 from srdda.io.modelfile import load_model
 from srdda.io.results_store import ResultsStore, ResultsWriteError, load_checkpoint, read_results, resume
 from srdda.ledger import ENERGY_NAMES
@@ -119,7 +119,7 @@ def test_an_unwritable_output_folder_is_one_message(tmp_path: Path, monkeypatch:
             raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(file))
         return real_open(file, *args, **kwargs)
 
-    monkeypatch.setattr(results_store, "open", refusing_open, raising=False)
+    monkeypatch.setattr(outputlock, "open", refusing_open, raising=False)
     out = _one_message(CliRunner().invoke(main, ["run", str(ROD), "--steps", "5", "--out", str(read_only)]), 1)
     assert f"cannot write in {read_only} (Permission denied)" in out
 

@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from . import __version__
 from .integrators.methods import METHODS
-from .cli_results import animate_command, plot_command, report_paper, resume_run, vtk_command
+from .cli_results import animate_command, plot_command, prepare_resume_run, report_paper, vtk_command
 from .io.convert import convert
 from .io.modelfile import ModelFileError, format_validation, load_model, read_model_text
 from .io.results_store import OutputExistsError, ResultsStore, ResultsWriteError, read_results
@@ -147,20 +147,59 @@ def output_folder(model: str, out: str | None) -> Path:
 @click.option("--overwrite", is_flag=True, help="Replace the results already in --out (else that is an error).")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 @click.option("--resume", "resume_file", type=click.Path(exists=True, dir_okay=False), default=None,
-              help="Continue the run of a results.h5 from its last flush (instead of MODEL).")
-@click.option("--flush-every", type=click.IntRange(min=1), default=100, show_default=True,
-              help="Recorded steps between flushes of results.h5 (what a killed run can lose).")
+              help="Continue the run of a results.h5 from its last intact checkpoint, with the settings it stores "
+                   "(instead of MODEL).")
+@click.option("--flush-every", type=click.IntRange(min=1), default=None,
+              help="Recorded steps between flushes of results.h5 (what a killed run can lose) [default: 100; with "
+                   "--resume: the run's own].")
 def run_command(model: str | None, method: str | None, steps: int | None, end_time: float | None, dt: float | None,
-                out: str | None, overwrite: bool, quiet: bool, resume_file: str | None, flush_every: int) -> None:
+                out: str | None, overwrite: bool, quiet: bool, resume_file: str | None, flush_every: int | None) -> None:
     """Run a model file; write results.h5 (see srdda plot/animate/vtk) and its time histories."""
     if resume_file is not None:
         if model is not None:
             raise click.UsageError("give either MODEL or --resume RESULTS, not both")
-        if resume_run(resume_file, quiet, flush_every) != "completed":
-            sys.exit(3)
-        return
-    if model is None:
-        raise click.UsageError("missing MODEL (or --resume RESULTS)")
+        given = [name for name, value in (("--method", method), ("--steps", steps), ("--end-time", end_time),
+                                          ("--dt", dt), ("--out", out), ("--overwrite", overwrite))
+                 if value not in (None, False)]
+        if given:
+            raise click.UsageError(f"--resume continues a run with the settings and the folder its file keeps; "
+                                   f"{', '.join(given)} cannot change them (run the model again for that)")
+        prepared = prepare_resume_run(resume_file, flush_every)
+        store_path, total, desc = prepared.path, prepared.settings.n_steps, f"resume {prepared.settings.method}"
+        start = (f"continuing {store_path} from step {prepared.start}" if prepared.start >= 0 else
+                 f"restarting {store_path} from its first step")
+        go = prepared.run
+    else:
+        if model is None:
+            raise click.UsageError("missing MODEL (or --resume RESULTS)")
+        store, arrays, settings = _new_run(model, method, steps, end_time, dt, out, overwrite, flush_every)
+        store_path, total, desc, start = store.path, settings.n_steps, settings.method, f"writing {store.path}"
+
+        def go(progress):
+            return run(arrays, settings, progress=progress, recorders=[store], keep_history=False)
+    out_dir = store_path.parent
+    click.echo(start)
+    try:
+        with tqdm(total=total, disable=True if quiet else None, unit="step", desc=desc) as bar:
+            result = go(lambda _: bar.update(1))
+        path, recorded = save_histories(store_path, result, out_dir)
+    except ResultsWriteError as exc:
+        if exc.cut_short:  # HDF5 may crash in its exit handler after a flush that failed half-way: skip it
+            click.echo(f"Error: {exc}", err=True)
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(1)
+        raise click.ClickException(str(exc)) from None
+    except OSError as exc:
+        raise click.ClickException(f"cannot write the histories in {out_dir} ({exc.strerror})") from None
+    click.echo(f"{result.status}: {recorded} recorded steps written to {store_path} and {path}")
+    if not result.completed:
+        sys.exit(3)
+
+
+def _new_run(model: str, method: str | None, steps: int | None, end_time: float | None, dt: float | None,
+             out: str | None, overwrite: bool, flush_every: int | None) -> tuple[ResultsStore, ModelArrays, RunSettings]:
+    """The store (its output held), arrays and settings of a run of a model file; one message on any error."""
     mdl, settings = _load(model)
     if method:
         settings = _override(settings, "--method", method=method)
@@ -171,33 +210,16 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
                              end_time=settings.end_time if end_time is None else end_time)
     arrays = _compile(mdl, settings, model)  # before any output is made
     out_dir = output_folder(model, out)
-    store = ResultsStore(out_dir / "results.h5", settings, flush_every=flush_every, overwrite=overwrite,
+    store = ResultsStore(out_dir / "results.h5", settings, flush_every=flush_every or 100, overwrite=overwrite,
                          model_text=read_model_text(model))
     try:
         store.acquire()  # before the run starts: fail at once if the output is taken
     except OutputExistsError as exc:
         raise BadInput(f"{exc}; pass --overwrite to replace them, choose another --out, or (a run "
-                                   f"that did not finish) continue it with: srdda run --resume {store.path}") from None
+                       f"that did not finish) continue it with: srdda run --resume {store.path}") from None
     except ResultsWriteError as exc:
         raise click.ClickException(str(exc)) from None
-    click.echo(f"writing {store.path}")
-    try:
-        with tqdm(total=settings.n_steps, disable=True if quiet else None, unit="step",
-                  desc=settings.method) as bar:
-            result = run(arrays, settings, progress=lambda _: bar.update(1), recorders=[store], keep_history=False)
-        path, recorded = save_histories(store.path, result, out_dir)
-    except ResultsWriteError as exc:
-        if exc.cut_short:  # HDF5 may crash in its exit handler after a flush that failed half-way: skip it
-            click.echo(f"Error: {exc}", err=True)
-            sys.stdout.flush()
-            sys.stderr.flush()
-            os._exit(1)
-        raise click.ClickException(str(exc)) from None
-    except OSError as exc:
-        raise click.ClickException(f"cannot write the histories in {out_dir} ({exc.strerror})") from None
-    click.echo(f"{result.status}: {recorded} recorded steps written to {store.path} and {path}")
-    if not result.completed:
-        sys.exit(3)
+    return store, arrays, settings
 
 
 @main.command("check")

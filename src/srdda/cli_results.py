@@ -7,9 +7,10 @@ from pathlib import Path
 import click
 from tqdm import tqdm
 
-from .io.results_store import ResultsFileError, ResultsWriteError, StoredResult, read_results, resume
+from .io.results_store import (ResultsDamageWarning, ResultsFileError, ResultsInUseError, ResultsWriteError,
+                               Resumption, StoredResult, prepare_resume, read_results)
 
-__all__ = ["plot_command", "animate_command", "vtk_command", "resume_run", "report_paper"]
+__all__ = ["plot_command", "animate_command", "vtk_command", "prepare_resume_run", "report_paper"]
 
 RUN = click.Path(exists=True)
 
@@ -19,11 +20,18 @@ def _read(path: str) -> StoredResult:
     if Path(path).is_dir():
         path = str(Path(path) / "results.h5")
     try:
-        res = read_results(path)
+        with warnings.catch_warnings():  # the damage is told below, every time (a warning is shown once)
+            warnings.simplefilter("ignore", ResultsDamageWarning)
+            res = read_results(path)
+    except ResultsInUseError as exc:
+        raise click.ClickException(str(exc)) from None
     except ResultsFileError as exc:
         raise click.UsageError(str(exc)) from None
+    if res.damage is not None:
+        click.echo(f"warning: {res.damage}", err=True)
     if "step" not in res.histories or len(res.step) == 0:
-        raise click.UsageError(f"{path}: no recorded step was flushed yet")
+        raise click.UsageError(f"{path}: no intact recorded step to read" if res.damage else
+                               f"{path}: no recorded step was flushed yet")
     return res
 
 
@@ -36,25 +44,21 @@ def _writable(path: Path, folder: bool = False) -> Path:
     return path
 
 
-def resume_run(path: str, quiet: bool = False, flush_every: int | None = None) -> str:
-    """Continue a results file's run to its last step (``srdda run --resume``); returns the final status."""
+def prepare_resume_run(path: str, flush_every: int | None = None) -> Resumption:
+    """Hold a results file for ``srdda run --resume`` and say where it continues; one message on any error."""
     try:
-        stored = read_results(path)
-        steps = stored.histories.get("step", [])
-        if len(steps) == 0:
-            click.echo(f"{path}: the run stopped before its first flush; restarting it from the beginning", err=True)
-        done = int(steps[-1]) if len(steps) else 0
-        with tqdm(total=max(0, int(stored.settings.n_steps) - done), disable=True if quiet else None, unit="step",
-                  desc=f"resume {stored.method}") as bar:
-            result = resume(path, flush_every=flush_every, progress=lambda _: bar.update(1))
+        prepared = prepare_resume(path, flush_every=flush_every)
+    except ResultsInUseError as exc:
+        raise click.ClickException(str(exc)) from None
     except ResultsFileError as exc:
         raise click.UsageError(str(exc)) from None
     except ResultsWriteError as exc:
         raise click.ClickException(str(exc)) from None
-    final = read_results(path)
-    click.echo(f"{result.status}: {path} now holds steps {int(final.step[0])}..{int(final.step[-1])} "
-               f"({len(final.step)} recorded)")
-    return result.status
+    if prepared.damage is not None:
+        click.echo(f"warning: {prepared.damage}", err=True)
+    elif prepared.start < 0:
+        click.echo(f"{path}: the run stopped before its first flush; restarting it from the beginning", err=True)
+    return prepared
 
 
 def report_paper(directory: str, names: list[str], methods: list[str], quiet: bool = False,

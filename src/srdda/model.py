@@ -14,6 +14,7 @@ from typing import Literal
 import numpy as np
 import shapely
 
+from .constraints.checks import redundant_constraints, unheld_massless_blocks
 from .constraints.data import BoltSpec, ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
 from .history import HistoryError, MotionHistory, TimeHistory
 from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon, overlapping_pairs
@@ -240,6 +241,10 @@ class Model:
             for m in (a, b):
                 if m not in self.materials:
                     raise ModelError(f"joint material {name!r}: unknown block material {m!r}")
+            held = self.joint_map.get((a, b), self.joint_map.get((b, a), name))
+            if held != name:
+                raise ModelError(f"joint material {name!r}: the block materials ({a!r}, {b!r}) already have joint "
+                                 f"material {held!r}; give each pair of materials one joint material")
             self.joint_map[(a, b)] = name
         return name
 
@@ -397,6 +402,9 @@ class Model:
             block = self.block_at(p, what)
         elif not 0 <= block < len(self.blocks):
             raise ModelError(f"{what}: block {block} does not exist")
+        elif not self._covers(block, p):
+            raise ModelError(f"{what}: point {tuple(float(c) for c in p)} lies outside block "
+                             f"{self.blocks[block].name!r}")
         return block, p
 
     def add_fixed_point(self, point: Sequence[float], block: int | None = None, stiffness: float | None = None) -> None:
@@ -432,12 +440,15 @@ class Model:
     # -- constraints, springs, driven points (srdda.constraints) -------------
     def blocks_at(self, point: Sequence[float]) -> list[int]:
         """Indices of every block containing ``point`` (on a boundary counts)."""
-        if self.dim == SOLID.dim:
-            return [i for i, b in enumerate(self.blocks)
-                    if polyhedron_covers(b.vertices, b.faces, np.asarray(point, dtype=float))]
-        p = shapely.Point(point)
-        return [i for i, b in enumerate(self.blocks)
-                if shapely.Polygon(b.vertices).buffer(1e-9 * _scale(b.vertices)).covers(p)]
+        p = np.asarray(point, dtype=float)
+        return [i for i in range(len(self.blocks)) if self._covers(i, p)]
+
+    def _covers(self, block: int, point: np.ndarray) -> bool:
+        """True if ``point`` lies in the block or on its boundary (to 1e-9 of its size)."""
+        b = self.blocks[block]
+        if b.faces is not None:
+            return polyhedron_covers(b.vertices, b.faces, point)
+        return shapely.Polygon(b.vertices).buffer(1e-9 * _scale(b.vertices)).covers(shapely.Point(point))
 
     def add_hinge(self, point: Sequence[float], block_a: int | None = None, block_b: int | None = None,
                   point_b: Sequence[float] | None = None, correct_drift: bool = True, name: str = "") -> int:
@@ -464,10 +475,6 @@ class Model:
             raise ModelError(f"{what}: block_a and block_b must differ")
         if self.blocks[a].fixed and self.blocks[b].fixed:
             raise ModelError(f"{what}: both blocks are fixed")
-        for block, p in ((a, pa), (b, pb)):
-            if block not in self.blocks_at(p):
-                raise ModelError(f"{what}: point {tuple(float(c) for c in p)} lies outside block "
-                                 f"{self.blocks[block].name!r}")
         self.hinges.append(HingeSpec(a, pa, b, pb, bool(correct_drift), what))
         return len(self.hinges) - 1
 
@@ -781,7 +788,7 @@ class Model:
         vertices = np.concatenate([b.vertices for b in self.blocks])
         if bt is PLANE and not self.allow_overlap:
             self._check_overlaps(vertices, block_ptr)
-        return ModelArrays(
+        arrays = ModelArrays(
             vertices=vertices,
             block_ptr=block_ptr,
             density=np.array([mats[b.material].density for b in self.blocks]),
@@ -812,6 +819,24 @@ class Model:
             mesh=mesh,
             face_joint=face_joint,
         )
+        self._check_held(arrays)
+        return arrays
+
+    def _check_held(self, arrays: ModelArrays) -> None:
+        """ModelError naming redundant constraints and moving blocks without mass that nothing holds."""
+        redundant = redundant_constraints(arrays)
+        if redundant:
+            raise ModelError(f"redundant constraints: {'; '.join(redundant)} (their forces would be undetermined: "
+                             "the run stops with a singular system or gives arbitrary constraint forces); remove "
+                             "the repeated ones")
+        free = unheld_massless_blocks(arrays)
+        if free:
+            mats = list(self.materials)
+            names = ", ".join(f"{self.blocks[b].name!r} (material {mats[self.blocks[b].material]!r})"
+                              for b in free[:5]) + (f" and {len(free) - 5} more" if len(free) > 5 else "")
+            raise ModelError(f"moving blocks without mass (density 0) that nothing holds: {names}; their "
+                             "equations are singular. Give the material a density, fix the block, or hold it by "
+                             "fixed points, springs, hinges or pins at enough points (two in 2D, three in 3D)")
 
 
 def _scale(v: np.ndarray) -> float:

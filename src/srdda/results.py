@@ -23,7 +23,12 @@ __all__ = ["Recorder", "Result", "measured_points", "bolt_histories"]
 
 
 class Recorder(Protocol):
-    """Receives the recorded steps of a run (in memory, to a file, ...)."""
+    """Receives the recorded steps of a run (in memory, to a file, ...).
+
+    A recorder that holds something (a file, a lock) may also have
+    ``abandon(reason: str)``: the run calls it instead of ``finish`` when it
+    stops by an exception (Ctrl-C, an error), then lets the exception go on.
+    """
 
     def record(self, arrays: ModelArrays, state: State, solves: int, energy: Mapping[str, float]) -> None: ...
 

@@ -20,12 +20,13 @@ import math
 import warnings
 from typing import Annotated, Literal
 
-from pydantic import AfterValidator, AliasChoices, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic import (AfterValidator, AliasChoices, BeforeValidator, ConfigDict, Field, ValidationInfo,
+                      field_validator, model_validator)
 from pydantic.dataclasses import dataclass
 
 from .integrators.methods import METHODS, Method, method_preset
 from .integrators.schemes import SCHEMES
-from .units import to_si
+from .units import reject_boolean, to_si
 from .solvers import DEFAULT_TOLERANCE, SOLVERS, available_solvers
 
 __all__ = ["RunSettings", "MIN_DT", "MAX_DT", "MAX_STEPS", "MAX_STEP_CUT_FACTOR"]
@@ -116,6 +117,11 @@ class RunSettings:
     open_close_settle_after: Annotated[int, Field(ge=1)] = 4  # solves after which contacts may only settle
     step_cut_factor: Annotated[Ratio, Field(gt=0, le=MAX_STEP_CUT_FACTOR)] = 1.0 / 3.0  # Δt ← factor·Δt
     min_dt: Annotated[Seconds | None, Field(gt=0)] = None  # the run stops below this; None: 1e-6 × dt
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_boolean(cls, value: object, info: ValidationInfo) -> object:
+        return reject_boolean(value, cls.__pydantic_fields__[info.field_name].annotation)
 
     @model_validator(mode="after")
     def _consistent(self) -> RunSettings:

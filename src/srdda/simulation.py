@@ -8,10 +8,13 @@ the end stays recorded.
 """
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
+
+import numpy as np
 
 from .ledger import EnergyWatch, energies
 from .contact.law import ContactLaw
@@ -66,13 +69,20 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     advice = time_step_advice(arrays, settings)
     if advice is not None:
         warnings.warn(advice, TimeStepWarning, stacklevel=2)
-    energy = energies(stepper.terms, arrays, state)
-    record(state, 0, energy)
-    # contacts must never create energy; dda0's and dda1's rotation artefacts (the paper's Tables 1-5) do
-    watch = EnergyWatch(energy) if any(t.energy_kind == "contact" for t in stepper.terms) else None
     summary = WarningSummary()
-    with blas_threads_for_steps():
-        status, state = _steps(stepper, settings, state, record, watch, progress, stop, summary)
+    try:
+        energy = energies(stepper.terms, arrays, state)
+        record(state, 0, energy)
+        # contacts must never create energy; dda0's and dda1's rotation artefacts (the paper's Tables 1-5) do
+        watch = EnergyWatch(energy) if any(t.energy_kind == "contact" for t in stepper.terms) else None
+        with blas_threads_for_steps():
+            status, state = _steps(stepper, settings, state, record, watch, progress, stop, summary)
+    except BaseException as exc:  # Ctrl-C, an error: a recorder that holds something lets it go
+        for sink in sinks:
+            abandon = getattr(sink, "abandon", None)
+            if abandon is not None:
+                abandon(f"interrupted ({type(exc).__name__})")
+        raise
     for sink in sinks:
         sink.finish(status, state)
     summary.emit()
@@ -106,11 +116,19 @@ def _steps(stepper: Stepper, settings: RunSettings, state: State,
             continue
         assert outcome.state is not None
         before, state = state, replace(outcome.state, dt_next=dt)
+        overflow = _non_finite(state, ("stress", "acceleration", "points", "rotation"))
+        if overflow is not None:
+            status, state = f"diverged: step {state.step}: {overflow}", before
+            break
         stopped = stop is not None and stop(state)
         recorded = stopped or state.step % settings.record_every == 0 or state.step == last_step or (
             end_time is not None and _reached(state.time, end_time, settings.dt))
         if watch is not None or recorded:  # the ledger every step only where it is watched
             energy = energies(stepper.terms, arrays, state)
+            overflow = _non_finite(energy, [k for k, v in energy.items() if not math.isfinite(v)])
+            if overflow is not None:
+                status, state = f"diverged: step {state.step}: {overflow}", before
+                break
             created = watch.check(energy, arrays, before, state) if watch is not None else None
             if created is not None:
                 warnings.warn(created, EnergyWarning, stacklevel=2)
@@ -121,6 +139,19 @@ def _steps(stepper: Stepper, settings: RunSettings, state: State,
         if stopped:
             break
     return status, state
+
+
+def _non_finite(values: State | dict[str, float], names: Sequence[str]) -> str | None:
+    """What of ``names`` (fields of a state, or keys of the energies) is not finite, or None if all are.
+
+    The step itself checks the displacements and velocities; values that overflow later (a stress, an
+    energy) end the run too, before the step is recorded: a run never ends "completed" with them.
+    """
+    bad = [n for n in names if not np.all(np.isfinite(values[n] if isinstance(values, dict) else getattr(values, n)))]
+    if not bad:
+        return None
+    what = "energies" if isinstance(values, dict) else "values"
+    return f"non-finite {what}: {', '.join(bad)} (they overflowed); the steps before it are kept"
 
 
 class WarningSummary:

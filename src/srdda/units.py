@@ -11,9 +11,10 @@ file implies or is told with ``--units``, and converts to SI.
 """
 from __future__ import annotations
 
+import typing
 from dataclasses import dataclass
 
-__all__ = ["UNITS", "to_si", "UnitSystem", "UNIT_SYSTEMS", "STANDARD_GRAVITY", "detect_unit_system"]
+__all__ = ["UNITS", "to_si", "reject_boolean", "UnitSystem", "UNIT_SYSTEMS", "STANDARD_GRAVITY", "detect_unit_system"]
 
 STANDARD_GRAVITY = 9.80665  # m/s², exact by definition (the pound-force is defined with it)
 
@@ -47,6 +48,26 @@ def to_si(value: object, kind: str) -> float:
             raise ValueError(f"unit {parts[1]!r} is not a {kind} unit; use one of {', '.join(table)}")
         return number * table[parts[1]]
     raise ValueError(f"expected a number or 'number unit', got {type(value).__name__}")
+
+
+def _allows_boolean(annotation: object) -> bool:
+    return annotation is bool or any(_allows_boolean(a) for a in typing.get_args(annotation))
+
+
+def _holds_boolean(value: object) -> bool:
+    return isinstance(value, bool) or (isinstance(value, (list, tuple)) and any(_holds_boolean(v) for v in value))
+
+
+def reject_boolean(value: object, annotation: object) -> object:
+    """``value``, or ValueError if it holds true/false where ``annotation`` expects no boolean.
+
+    pydantic would take ``true`` for the number 1 or the block index 1; in a
+    model file that is always a mistake (``poisson = false``, ``block = true``).
+    Nested tables (dicts) are left to their own models.
+    """
+    if _holds_boolean(value) and not _allows_boolean(annotation):
+        raise ValueError("true/false is not valid here: give a number (or a name where one is expected)")
+    return value
 
 
 @dataclass(frozen=True)

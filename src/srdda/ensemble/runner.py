@@ -28,6 +28,7 @@ from typing import Any
 from tqdm import tqdm
 
 from ..io.modelfile import model_from_dict
+from ..io.outputlock import release_lock, take_lock
 from ..simulation import run
 from .collect import RockfallRecorder, SettleRule
 from .sampling import apply_values, sample, tracked_block
@@ -37,6 +38,7 @@ __all__ = ["run_one", "run_ensemble", "EnsembleRun", "read_run_files"]
 
 RUNS_DIR = "runs"
 FINGERPRINT_FILE = "ensemble.json"
+LOCK_FILE = "ensemble.lock"  # held while an ensemble writes the folder (srdda.io.outputlock)
 
 
 def run_one(spec: EnsembleSpec, base: dict[str, Any], index: int) -> dict[str, Any]:
@@ -165,13 +167,26 @@ def run_ensemble(spec_path: str | Path, out: str | Path, runs: int | None = None
 
     ``workers``: processes of the local cluster (default one per core);
     ``scheduler``: address of a running Dask scheduler instead;
-    ``processes=False``: a local cluster of threads in this process (tests).
+    ``processes=False``: a local cluster of threads in this process (tests). The folder is held (an OS
+    lock on ``ensemble.lock``) while the ensemble writes it: a second one into it fails at once, naming this one.
     """
-    from .tables import write_outputs
-
     start = time.perf_counter()
     spec, base = load_spec(spec_path, runs)
     out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    lock = out / LOCK_FILE
+    held = take_lock(lock, str(out))  # a second ensemble into the same folder fails here, naming this one
+    try:
+        return _run_held(spec, base, out, workers, scheduler, progress, processes, start)
+    finally:
+        release_lock(lock, held)
+
+
+def _run_held(spec: EnsembleSpec, base: dict[str, Any], out: Path, workers: int | None, scheduler: str | None,
+              progress: bool, processes: bool, start: float) -> EnsembleRun:
+    """:func:`run_ensemble` once ``out`` is held."""
+    from .tables import write_outputs
+
     _claim(out, spec, base)
     done = read_run_files(out, spec.runs)
     todo = [i for i in range(spec.runs) if i not in done]

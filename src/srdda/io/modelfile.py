@@ -356,6 +356,9 @@ def load_model(path: str | Path) -> tuple[Model, RunSettings]:
         raise ModelFileError(f"{p}: not valid TOML ({exc})") from None
     except RecursionError:
         raise ModelFileError(f"{p}: not valid TOML (arrays or tables nested too deeply)") from None
+    except ValueError:  # int() in tomllib refuses integers of more than 4300 digits
+        raise ModelFileError(f"{p}: not valid TOML (an integer has more digits than Python reads, 4300; no model "
+                             "value needs that many)") from None
     return model_from_dict(data, str(p), p.parent)
 
 

@@ -36,24 +36,29 @@ every step up to it is on disk.
 Output safety (docs/reliability.md): a store holds its file from the first
 write (or :meth:`ResultsStore.acquire`) to :meth:`ResultsStore.finish` by an
 OS lock on ``<file>.lock`` taken before the HDF5 file is opened, which names
-the run holding it; it never truncates an existing file (a replaced file is
-unlinked first, so a reader keeps its copy); before each flush it checks that
-the disk has room for it and keeps ``<file>.reserve`` (room for one flush) to
-close the file cleanly when the disk is full. A failed write stops the run
-with one :class:`ResultsWriteError` saying which steps the file keeps.
+the run holding it (:mod:`srdda.io.outputlock`); it never truncates an existing
+file (a replaced file is unlinked first, so a reader keeps its copy); before
+each flush it checks that the disk has room for it and keeps a reserve (room
+for one flush, in a file without a name: nothing is left behind, whatever
+stops the run) to close the file cleanly when the disk is full. A failed write
+stops the run with one :class:`ResultsWriteError` saying which steps the file
+keeps. Every dataset and text attribute carries a checksum
+(:mod:`srdda.io.integrity`): a damaged file is found when it is read, and
+:func:`resume` continues it from its last intact checkpoint.
 """
 from __future__ import annotations
 
 import dataclasses
 import datetime
 import errno
-import io
 import json
+import io
 import os
 import platform
 import shutil
-import socket
 import sys
+import tempfile
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -70,12 +75,16 @@ from ..settings import RunSettings
 from ..simulation import run
 from ..state import State, initial_state
 from .checkpoint import append_checkpoint, checkpoint_count, commit_checkpoint, truncate_checkpoints
-from .results_reader import (FORMAT, FORMAT_VERSION, ResultsFileError, StoredResult, contact_records,
-                             group_length, load_checkpoint, model_arrays_from_file, open_results, read_results)
+from .integrity import LIBVER, DamagedError, checksummed, read_text, write_text
+from .outputlock import OutputInUseError, ResultsWriteError, release_lock, take_lock
+from .results_reader import (FORMAT, FORMAT_VERSION, Intact, ResultsDamageWarning, ResultsFileError,
+                             ResultsInUseError, StoredResult, checkpoint_state, inspect_results, load_checkpoint,
+                             model_arrays_from_file, open_results, read_header, read_results)
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state", "ResultsStore", "ResultsFileError",
-           "ResultsWriteError", "OutputInUseError", "OutputExistsError", "StoredResult", "read_results", "resume",
-           "load_checkpoint", "model_arrays_from_file"]
+           "ResultsWriteError", "ResultsDamageWarning", "ResultsInUseError", "OutputInUseError", "OutputExistsError",
+           "StoredResult", "read_results", "resume", "prepare_resume", "Resumption", "ResumePoint", "load_checkpoint",
+           "model_arrays_from_file"]
 
 
 ContactProvider = Callable[[ModelArrays, State], Mapping[str, np.ndarray] | None]
@@ -104,123 +113,39 @@ def contacts_from_state(arrays: ModelArrays, state: State) -> dict[str, np.ndarr
             if isinstance(getattr(c, f.name), np.ndarray) and len(getattr(c, f.name)) == n}
 
 
-class ResultsWriteError(OSError):
-    """The results file cannot be written (folder not writable, disk full, ...); the message says what is kept.
-
-    ``cut_short``: a flush failed half-way, so HDF5 may crash when Python exits
-    (a program should end without running exit handlers: ``os._exit``).
-    """
-
-    cut_short: bool = False
-
-
-class OutputInUseError(ResultsWriteError):
-    """Another run is writing the results file; the message names it (pid, host, start time, command)."""
-
-
 class OutputExistsError(ResultsWriteError):
     """The results file exists and the store was told not to replace it."""
-
-
-try:  # an advisory lock the OS drops when its holder dies, even by SIGKILL: no stale locks
-    import fcntl
-
-    def _try_lock(fh: IO[str]) -> bool:
-        try:
-            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            return False
-        return True
-except ImportError:  # Windows
-    import msvcrt
-
-    def _try_lock(fh: IO[str]) -> bool:
-        fh.seek(0)  # every run locks the same (first) byte
-        try:
-            msvcrt.locking(fh.fileno(), msvcrt.LK_NBLCK, 1)
-        except OSError:
-            return False
-        return True
 
 
 def _lock_path(path: Path) -> Path:
     return path.with_name(path.name + ".lock")
 
 
-def _reserve_path(path: Path) -> Path:
-    return path.with_name(path.name + ".reserve")
+def _reserve_file(path: Path) -> IO[bytes]:
+    """A file without a name in ``path``'s folder to hold the disk reserve: the OS frees it with its holder."""
+    return tempfile.TemporaryFile(dir=path.parent, prefix=f".{path.name}.reserve-")
 
 
-def _take_lock(path: Path) -> IO[str]:
-    """Hold ``<path>.lock`` (an OS lock) and write who holds it; raise :class:`OutputInUseError` if another run does."""
-    lock = _lock_path(path)
-    while True:
-        try:
-            fh = open(lock, "a+", encoding="utf-8")
-        except OSError as exc:
-            raise ResultsWriteError(f"{path}: cannot write in {path.parent} ({exc.strerror})") from None
-        try:
-            locked = _try_lock(fh)
-        except OSError as exc:  # a file system without locks (some network mounts)
-            fh.close()
-            raise ResultsWriteError(f"{path}: cannot lock {lock} ({exc.strerror}); write to a local disk") from None
-        if not locked:
-            fh.seek(0)
-            holder = fh.read().strip() or "a run that has not said who it is yet"
-            fh.close()
-            raise OutputInUseError(f"{path} is being written by another run ({holder}); wait for it to end or "
-                                   "write to another output")
-        try:  # the previous holder may have removed the lock file between our open and our lock: retry
-            if os.fstat(fh.fileno()).st_ino == os.stat(lock).st_ino:
-                break
-        except FileNotFoundError:
-            pass
-        fh.close()
-    started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    fh.seek(0)
-    fh.truncate()
-    fh.write(f"pid {os.getpid()} on {socket.gethostname()}, started {started}, command: {' '.join(sys.argv)}\n")
-    fh.flush()
-    return fh
-
-
-def _release_lock(path: Path, fh: IO[str]) -> None:
-    """Remove ``<path>.lock`` while still holding it, then drop the lock."""
-    try:
-        os.remove(_lock_path(path))
-    except OSError:
-        pass
-    fh.close()
-
-
-def _make_room(path: Path, reserve: int, need: int) -> None:
-    """Check that ``need`` bytes beyond the reserve are free; keep ``<path>.reserve`` at ``reserve`` bytes.
+def _make_room(reserve_file: IO[bytes], path: Path, reserve: int, need: int) -> None:
+    """Check that ``need`` bytes beyond the reserve are free; keep ``reserve`` bytes in ``reserve_file``.
 
     Where the OS can allocate disk blocks (posix_fallocate) the check allocates
     them for real (so quotas count too) and gives them back for the flush;
-    elsewhere it reads the free space. Raises OSError (ENOSPC) if there is no room.
+    elsewhere it reads the free space of ``path``'s folder. Raises OSError (ENOSPC) if there is no room.
     """
-    reserve_file = _reserve_path(path)
-    with open(reserve_file, "r+b" if reserve_file.exists() else "wb") as fh:
-        if hasattr(os, "posix_fallocate"):
-            os.posix_fallocate(fh.fileno(), 0, reserve + need)
-            fh.truncate(reserve)
-            return
-        fh.seek(0, os.SEEK_END)
-        block = bytes(1 << 20)
-        while fh.tell() < reserve:
-            fh.write(block[: reserve - fh.tell()])
-        fh.flush()
-        os.fsync(fh.fileno())
+    fh = reserve_file
+    if hasattr(os, "posix_fallocate"):
+        os.posix_fallocate(fh.fileno(), 0, reserve + need)
+        fh.truncate(reserve)
+        return
+    fh.seek(0, os.SEEK_END)
+    block = bytes(1 << 20)
+    while fh.tell() < reserve:
+        fh.write(block[: reserve - fh.tell()])
+    fh.flush()
+    os.fsync(fh.fileno())
     if shutil.disk_usage(path.parent).free < need:
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-
-
-def _free_reserve(path: Path) -> None:
-    try:
-        os.remove(_reserve_path(path))
-    except OSError:
-        pass
 
 
 def _flush_bytes(rows: Mapping[str, list[np.ndarray]], state: State | None) -> int:
@@ -265,7 +190,7 @@ def _append(group: h5py.Group, name: str, rows: np.ndarray, chunk_rows: int) -> 
         row = rows.shape[1:]  # an empty axis (no measured points, say) cannot be chunked: leave it growable
         group.create_dataset(name, shape=(0, *row), maxshape=(None, *(d if d else None for d in row)),
                              dtype=rows.dtype, chunks=(_chunk_rows(row, rows.dtype.itemsize, chunk_rows),
-                                                       *(max(d, 1) for d in row)))
+                                                       *(max(d, 1) for d in row)), fletcher32=True)
     ds = group[name]
     n = ds.shape[0]
     ds.resize(n + len(rows), axis=0)
@@ -273,24 +198,45 @@ def _append(group: h5py.Group, name: str, rows: np.ndarray, chunk_rows: int) -> 
 
 
 def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None) -> None:
-    """Every array field of ``arrays`` as a dataset; names, loads and the model text as attributes."""
+    """Every array field of ``arrays`` as a dataset; names, loads and the model text as attributes (checksummed)."""
+    def dataset(name: str, value: np.ndarray) -> None:
+        value = np.asarray(value)
+        group.create_dataset(name, data=value, **checksummed(value))
+
     for f in dataclasses.fields(arrays):
         value = getattr(arrays, f.name)
         if isinstance(value, np.ndarray):
-            group.create_dataset(f.name, data=value)
+            dataset(f.name, value)
     for part in ("mesh", "joints"):  # the faces of 3D blocks (None in 2D); the joint table
         record = getattr(arrays, part)
         if record is not None:
             for f in dataclasses.fields(record):
-                group.create_dataset(f"{part}.{f.name}", data=getattr(record, f.name))
+                dataset(f"{part}.{f.name}", getattr(record, f.name))
     links, links_meta = links_to_flat(arrays.links)  # hinges, springs, driven points (srdda.constraints)
     for name, value in links.items():
-        group.create_dataset(f"links.{name}", data=value)
-    group.attrs["links"] = json.dumps(links_meta)
-    group.attrs["block_names"] = json.dumps(list(arrays.block_names))
-    group.attrs["loads"] = json.dumps([ld.to_json() for ld in arrays.loads])
+        dataset(f"links.{name}", value)
+    write_text(group, "links", json.dumps(links_meta))
+    write_text(group, "block_names", json.dumps(list(arrays.block_names)))
+    write_text(group, "loads", json.dumps([ld.to_json() for ld in arrays.loads]))
     if model_text is not None:
-        group.attrs["model_text"] = model_text
+        write_text(group, "model_text", model_text)
+
+
+@dataclass(frozen=True)
+class ResumePoint:
+    """Where :func:`resume` continues a file: the checkpoint, and the rows the file keeps before it.
+
+    ``step`` -1: no usable checkpoint, the run restarts from its initial state.
+    ``copy`` (a damaged file): the intact rows to keep, written into a new file
+    that replaces the damaged one; None: the file is cut back in place.
+    """
+
+    step: int
+    checkpoint: int
+    history_rows: int
+    contact_records: int
+    last_step: int  # where the run ends (-1: at its end time)
+    copy: Intact | None = None
 
 
 @dataclass
@@ -303,10 +249,12 @@ class ResultsStore:
     written at recorded steps that are multiples of ``contact_every``.
     ``model_text``: the model file's text, stored for provenance and re-runs.
     ``overwrite``: replace an existing file (False: raise :class:`OutputExistsError`).
+    ``resume_from``: continue an existing file from that point (:func:`resume` sets it).
 
     The store holds ``<path>.lock`` from :meth:`acquire` (called at the first
-    record if not before) to :meth:`finish`; a write that fails stops the run
-    with :class:`ResultsWriteError` and leaves the file resumable.
+    record if not before) to :meth:`finish` (or :meth:`abandon`, when the run
+    stops by an exception); a write that fails stops the run with
+    :class:`ResultsWriteError` and leaves the file resumable.
     """
 
     path: str | Path
@@ -315,12 +263,14 @@ class ResultsStore:
     model_text: str | None = None
     contact_provider: ContactProvider | None = contacts_from_state
     contact_every: int = 1
-    append: bool = False  # used by resume(): continue an existing file
+    resume_from: ResumePoint | None = None
     overwrite: bool = True
     _file: h5py.File | None = field(default=None, init=False, repr=False)
     _lock: IO[str] | None = field(default=None, init=False, repr=False)
-    _reserved: int = field(default=0, init=False, repr=False)  # bytes held by <path>.reserve
+    _reserve: IO[bytes] | None = field(default=None, init=False, repr=False)  # the disk reserve's file
+    _reserved: int = field(default=0, init=False, repr=False)  # bytes it holds
     _flushed_step: int = field(default=-1, init=False, repr=False)  # step of the last complete checkpoint
+    _writing: bool = field(default=False, init=False, repr=False)  # inside a write to the file
     _buffer: dict[str, list[np.ndarray]] = field(default_factory=dict, init=False, repr=False)
     _contacts: dict[str, list[np.ndarray]] = field(default_factory=dict, init=False, repr=False)
     _contact_steps: list[int] = field(default_factory=list, init=False, repr=False)
@@ -372,32 +322,54 @@ class ResultsStore:
         self._guarded(lambda: self._set_status_and_close(status))
         self.release()
 
+    def abandon(self, reason: str) -> None:
+        """The run stopped by an exception (Ctrl-C, an error): keep what is recorded, close, release.
+
+        Outside a write, the buffered steps are flushed with a checkpoint and the
+        status says why the run stopped (``srdda run --resume`` continues it);
+        inside one (the exception interrupted a flush) the file is left as its
+        last complete flush made it.
+        """
+        if self._file is not None and self._writing:
+            f, self._file = self._file, None
+            _detach(f)
+        elif self._file is not None:
+            try:
+                if self._state is not None:
+                    self.finish(f"stopped: {reason}", self._state)
+                else:
+                    self._guarded(lambda: self._set_status_and_close(f"stopped: {reason}"))
+            except ResultsWriteError:
+                pass
+        self.release()
+
     # -- holding the output -------------------------------------------------------
     def acquire(self) -> None:
-        """Take the output's lock; refuse an existing file unless ``overwrite`` or ``append``.
+        """Take the output's lock; refuse an existing file unless ``overwrite`` or resuming it.
 
         Raises :class:`OutputInUseError` naming the run that holds it,
         :class:`OutputExistsError`, or :class:`ResultsWriteError` (folder not writable).
         """
         if self._lock is not None:
             return
-        self._lock = _take_lock(self.path)
-        if not self.append and not self.overwrite and self.path.exists():
+        self._lock = take_lock(_lock_path(self.path), str(self.path))
+        if self.resume_from is None and not self.overwrite and self.path.exists():
             self.release()
             raise OutputExistsError(f"{self.path} exists: {_describe(self.path)}")
 
     def release(self) -> None:
-        """Drop the output's lock (and the disk reserve); :meth:`finish` does it at the end of a run."""
+        """Drop the output's lock and the disk reserve; :meth:`finish` does it at the end of a run."""
+        if self._reserve is not None:
+            self._reserve.close()
+            self._reserve, self._reserved = None, 0
         if self._lock is not None:
-            _free_reserve(self.path)
-            _release_lock(self.path, self._lock)
+            release_lock(_lock_path(self.path), self._lock)
             self._lock = None
-            self._reserved = 0
 
     def _set_status_and_close(self, status: str) -> None:
         f = self._file
         self._file = None
-        f.attrs["status"] = status
+        write_text(f, "status", status)
         f.close()
 
     def _guarded(self, *writes: Callable[[], None], touches_file: bool = True) -> None:
@@ -412,6 +384,7 @@ class ResultsStore:
         hook, stderr = sys.unraisablehook, sys.stderr
         sys.unraisablehook = lambda unraisable: failures.append(unraisable.exc_value)
         sys.stderr = captured = io.StringIO()
+        self._writing = touches_file
         try:
             for write in writes:
                 write()
@@ -423,15 +396,19 @@ class ResultsStore:
             sys.unraisablehook, sys.stderr = hook, stderr
         if failures:
             self._abort(failures[0], touches_file)
+        self._writing = False
         stderr.write(captured.getvalue())  # what else the writes printed (a warning, say)
 
     def _abort(self, exc: BaseException, cut_short: bool) -> None:
         """Stop writing after a failed write (``cut_short``: it failed inside a flush of the HDF5 file)."""
-        _free_reserve(self.path)
+        self._writing = False
+        if self._reserve is not None:  # its room lets the file close cleanly on a full disk
+            self._reserve.close()
+            self._reserve, self._reserved = None, 0
         f, self._file = self._file, None
         if f is not None and not cut_short:  # the file is as the last flush left it: mark it and close it
             try:
-                f.attrs["status"] = f"stopped: the results could not be written ({_reason(exc)})"
+                write_text(f, "status", f"stopped: the results could not be written ({_reason(exc)})")
                 f.close()
             except (OSError, RuntimeError):
                 cut_short = True
@@ -442,10 +419,8 @@ class ResultsStore:
                 else "no step (it failed before its first flush)")
         if f is not None and cut_short:
             kept += " unless the interrupted flush damaged it"
-        advice = (f"free some space or fix the folder, then continue with: srdda run --resume {self.path}"
-                  if self._flushed_step >= 0 else "free some space or fix the folder, then run again")
         error = ResultsWriteError(f"{self.path}: cannot write the results ({_reason(exc)}); the file keeps {kept}; "
-                                  f"{advice}")
+                                  f"{_advice(exc, self.path, self._flushed_step >= 0)}")
         error.cut_short = f is not None and cut_short
         raise error from None
 
@@ -454,49 +429,65 @@ class ResultsStore:
         """Append the buffered steps and a checkpoint of the last state; flush the file."""
         if self._file is None:
             return
-        need = _flush_bytes(self._buffer, self._state)
-        self._reserved = max(self._reserved, need)
-        # a full disk fails here, before the file is touched; the reserve is there to close it cleanly
-        self._guarded(lambda: _make_room(self.path, self._reserved, need), touches_file=False)
-        self._write_buffered()
+        self._make_room(_flush_bytes(self._buffer, self._state))
+        history = {name: np.stack(rows) for name, rows in self._buffer.items() if rows}
+        contacts = {name: np.concatenate(rows) for name, rows in self._contacts.items() if rows}
+        self._write(history, contacts, self._contact_steps, self._contact_counts)
+        self._buffer = {}
+        self._contacts, self._contact_steps, self._contact_counts = {}, [], []
         self._pending = 0
         if self._state is not None:
             self._flushed_step = self._state.step
 
-    def _write_buffered(self) -> None:
+    def _make_room(self, need: int) -> None:
+        """Room on the disk for a write of ``need`` bytes and the reserve; a full disk fails here, file untouched."""
+        def make_room() -> None:
+            if self._reserve is None:
+                self._reserve = _reserve_file(self.path)
+            _make_room(self._reserve, self.path, self._reserved, need)
+
+        self._reserved = max(self._reserved, need)
+        self._guarded(make_room, touches_file=False)
+
+    def _write(self, history: Mapping[str, np.ndarray], contacts: Mapping[str, np.ndarray],
+               contact_steps: list[int], contact_counts: list[int]) -> None:
         """Three phases, each flushed: the data; the step rows that make them count; the checkpoint's step.
 
-        A write that fails in a phase stops the flush there, leaving what the
-        earlier phases made count: readers and resume see exactly the flushed
-        steps, and a checkpoint only once every step up to it is on disk.
+        ``history``: rows of each history (``step`` among them); ``contacts``:
+        the rows of the contact records of ``contact_steps``, ``contact_counts``
+        rows each. A write that fails in a phase stops the flush there, leaving
+        what the earlier phases made count: readers and resume see exactly the
+        flushed steps, and a checkpoint only once every step up to it is on disk.
         """
         f = self._file
-        hist, contacts, cp = f["history"], f["contacts"], f["checkpoint"]
+        hist, c, cp = f["history"], f["contacts"], f["checkpoint"]
         n_cp = checkpoint_count(cp)
         new_checkpoint = self._state is not None and (n_cp == 0 or cp["step"][n_cp - 1] != self._state.step)
 
         def data() -> None:
-            for name, rows in self._buffer.items():
-                if rows and name != "step":
-                    _append(hist, name, np.stack(rows), self.flush_every)
-            hist["energy"].attrs["names"] = json.dumps(ENERGY_NAMES)
-            if self._contact_steps:
-                if "offsets" not in contacts:
-                    _append(contacts, "offsets", np.zeros(1, dtype=np.int64), 1024)
-                for name, rows in self._contacts.items():
-                    if rows:
-                        _append(contacts, name, np.concatenate(rows), 4096)
+            for name, rows in history.items():
+                if name != "step":
+                    _append(hist, name, rows, self.flush_every)
+            if "energy" in hist:
+                write_text(hist["energy"], "names", json.dumps(ENERGY_NAMES))
+            if contact_steps:
+                if "offsets" not in c:
+                    _append(c, "offsets", np.zeros(1, dtype=np.int64), 1024)
+                for name, rows in contacts.items():
+                    _append(c, name, rows, 4096)
+            for group in (hist, c):  # what a damaged file would lack
+                write_text(group, "datasets", json.dumps(sorted(group)))
             if new_checkpoint:
                 append_checkpoint(cp, self._state, commit=False)
             f.flush()
 
         def steps() -> None:
-            if self._buffer.get("step"):
-                _append(hist, "step", np.stack(self._buffer["step"]), self.flush_every)
-            if self._contact_steps:
-                start = int(contacts["offsets"][-1])
-                _append(contacts, "step", np.array(self._contact_steps, dtype=np.int64), 1024)
-                _append(contacts, "offsets", start + np.cumsum(self._contact_counts, dtype=np.int64), 1024)
+            if "step" in history:
+                _append(hist, "step", history["step"], self.flush_every)
+            if contact_steps:
+                start = int(c["offsets"][-1])
+                _append(c, "step", np.array(contact_steps, dtype=np.int64), 1024)
+                _append(c, "offsets", start + np.cumsum(contact_counts, dtype=np.int64), 1024)
             f.flush()
 
         def checkpoint() -> None:
@@ -505,8 +496,6 @@ class ResultsStore:
                 f.flush()
 
         self._guarded(data, steps, checkpoint)
-        self._buffer = {}
-        self._contacts, self._contact_steps, self._contact_counts = {}, [], []
 
     def _record_contacts(self, arrays: ModelArrays, state: State) -> None:
         given = self.contact_provider(arrays, state)  # type: ignore[misc]
@@ -522,36 +511,59 @@ class ResultsStore:
         self._contact_steps.append(state.step)
 
     def _open(self, arrays: ModelArrays, state: State) -> None:
+        if self.resume_from is not None:  # a failure before the first flush keeps what the file kept
+            self._flushed_step = self.resume_from.step
         self.acquire()
-        self._reserved = _flush_bytes({}, state)
-        self._guarded(lambda: _make_room(self.path, self._reserved, self._reserved), touches_file=False)
+        self._make_room(_flush_bytes({}, state))
         self._guarded(lambda: self._open_file(arrays, state))
 
     def _open_file(self, arrays: ModelArrays, state: State) -> None:
-        if self.append:
+        point = self.resume_from
+        if point is not None and point.copy is None:
             self._file = h5py.File(self.path, "a")
-            self._last_step = _truncate_to_checkpoint(self._file)
-            self._flushed_step = self._last_step
-            self._file.attrs["status"] = "running"
+            self._last_step = _cut_back(self._file, point)
+            write_text(self._file, "status", "running")
+            self._file.attrs["flush_every"] = self.flush_every
             return
         if self.path.exists():  # unlink, never truncate: a reader of the old file keeps its copy
             self.path.unlink()
-        f = self._file = h5py.File(self.path, "w-")
-        f.attrs.update({"format": FORMAT, "format_version": FORMAT_VERSION, "method": self.settings.method,
-                        "status": "running",  # last_step -1: the run goes to its end_time, not a step count
-                        "last_step": -1 if self.settings.n_steps is None else state.step + self.settings.n_steps,
-                        "flush_every": self.flush_every, "contact_every": self.contact_every,
-                        "created": datetime.datetime.now(datetime.timezone.utc).isoformat()})
+        f = self._file = h5py.File(self.path, "w-", libver=LIBVER)
+        last_step = -1 if self.settings.n_steps is None else state.step + self.settings.n_steps
+        if point is not None:  # a damaged file rewritten: the run keeps its end
+            last_step = point.last_step
+        f.attrs.update({"format_version": FORMAT_VERSION, "last_step": last_step, "flush_every": self.flush_every,
+                        "contact_every": self.contact_every})
         from .. import __version__
 
-        f.attrs["srdda_version"] = __version__
-        f.create_group("versions").attrs.update(_versions())
-        f.create_group("settings").attrs["json"] = json.dumps(dataclasses.asdict(self.settings))
+        for name, text in (("format", FORMAT), ("method", self.settings.method), ("status", "running"),
+                           ("created", datetime.datetime.now(datetime.timezone.utc).isoformat()),
+                           ("srdda_version", __version__)):
+            write_text(f, name, text)
+        versions = f.create_group("versions")
+        for name, text in _versions().items():
+            write_text(versions, name, text)
+        write_text(f.create_group("settings"), "json", json.dumps(dataclasses.asdict(self.settings)))
         _write_model(f.create_group("model"), arrays, self.model_text)
         f.create_group("history")
         f.create_group("checkpoint")
         f.create_group("contacts")
         f.flush()
+        if point is not None and point.step >= 0:
+            self._copy_intact(point, state)
+
+    def _copy_intact(self, point: ResumePoint, state: State) -> None:
+        """Write the intact rows of a damaged file (``point.copy``) and the checkpoint to continue from."""
+        copy = point.copy
+        history = {name: rows[:point.history_rows] for name, rows in copy.histories.items()}
+        contacts, steps, counts = {}, [], []
+        if point.contact_records:
+            k, offsets = point.contact_records, copy.contacts["offsets"]
+            contacts = {name: rows[:offsets[k]] for name, rows in copy.contacts.items()
+                        if name not in ("step", "offsets")}
+            steps, counts = copy.contacts["step"][:k].tolist(), np.diff(offsets[:k + 1]).tolist()
+        self._state = state
+        self._write(history, contacts, steps, counts)
+        self._last_step = point.step
 
 
 def _reason(exc: BaseException) -> str:
@@ -592,39 +604,43 @@ def _describe(path: Path) -> str:
     """What a results file holds, for messages: its status and when it was created."""
     try:
         with h5py.File(path, "r") as f:
-            return (f"the results of a run (status {str(f.attrs.get('status', '?'))!r}, created "
-                    f"{str(f.attrs.get('created', '?'))})")
-    except OSError:
-        return "a file that is not an srdda results file"
+            return f"the results of a run (status {read_text(f, 'status')!r}, created {read_text(f, 'created')})"
+    except (OSError, DamagedError):
+        return "a file that is not an srdda results file (or a damaged one)"
 
 
-def _truncate_to_checkpoint(f: h5py.File) -> int:
-    """Cut every appended dataset back to the last complete checkpoint; return its step.
+def _advice(exc: BaseException, path: Path, kept: bool) -> str:
+    """What to do after a failed write: free space, or make the folder writable; then resume or run again."""
+    code = exc.errno if isinstance(exc, OSError) else None
+    if code in (errno.EACCES, errno.EPERM, errno.EROFS) or "ermission denied" in str(exc) or "ead-only" in str(exc):
+        fix = f"make {path.parent} writable"
+    elif code in (errno.ENOSPC, errno.EDQUOT) or "o space left" in str(exc):
+        fix = "free some space"
+    else:
+        fix = "free some space or fix the folder"
+    return f"{fix}, then continue with: srdda run --resume {path}" if kept else f"{fix}, then run again"
 
-    Without a complete checkpoint (a run stopped before its first flush) every
-    dataset is emptied and -1 returned: the run restarts from its initial state.
-    """
+
+def _cut_back(f: h5py.File, point: ResumePoint) -> int:
+    """Cut every appended dataset back to ``point`` (an intact file); return its step (-1: emptied, a restart)."""
     cp = f["checkpoint"]
-    n_cp = checkpoint_count(cp)
-    truncate_checkpoints(cp, n_cp)
-    if n_cp == 0:
-        for group in (f["history"], f["contacts"]):
+    if point.step < 0:
+        for group in (f["history"], f["contacts"], cp):
             for name in list(group):
                 del group[name]
+            for name in [a for a in group.attrs if a.startswith("datasets")]:
+                del group.attrs[name]
         return -1
-    step = int(cp["step"][n_cp - 1])
-    hist = f["history"]
-    n = group_length(hist)
-    keep = int(np.searchsorted(hist["step"][:n], step, side="right"))
-    for ds in hist.values():
-        ds.resize(keep, axis=0)
+    truncate_checkpoints(cp, point.checkpoint + 1)
+    for ds in f["history"].values():
+        ds.resize(point.history_rows, axis=0)
     c = f["contacts"]
     if "step" in c:
-        k = int(np.searchsorted(c["step"][:contact_records(c)], step, side="right"))
+        k = point.contact_records
         rows = int(c["offsets"][k])
         for name, ds in c.items():
             ds.resize({"step": k, "offsets": k + 1}.get(name, rows), axis=0)
-    return step
+    return point.step
 
 
 def _resume_arrays(path: str | Path) -> ModelArrays:
@@ -632,7 +648,9 @@ def _resume_arrays(path: str | Path) -> ModelArrays:
     try:
         return model_arrays_from_file(path)
     except ResultsFileError:
-        text = read_results(path).model_text
+        with warnings.catch_warnings():  # the damage, if any, is told by the resume
+            warnings.simplefilter("ignore", ResultsDamageWarning)
+            text = read_results(path, names=("step",)).model_text
         if text is None:
             raise
     import tomllib
@@ -642,29 +660,110 @@ def _resume_arrays(path: str | Path) -> ModelArrays:
     return model_from_dict(tomllib.loads(text), source=f"model text stored in {path}")[0].arrays()
 
 
+@dataclass
+class Resumption:
+    """A resume ready to run (:func:`prepare_resume`): the file is held, its state loaded; :meth:`run` continues it.
+
+    ``start``: the step it continues from (-1: the run restarts from its
+    initial state); ``settings``: the run's settings for the steps left;
+    ``damage``: one line naming what of the file is damaged (None if intact).
+    """
+
+    path: Path
+    arrays: ModelArrays
+    settings: RunSettings
+    state: State
+    store: ResultsStore
+    start: int
+    damage: str | None
+
+    def run(self, progress: Callable[[int], None] | None = None) -> Result:
+        """Continue the run to its end, appending to the file; returns the :class:`Result` of the continued part."""
+        try:
+            return run(self.arrays, self.settings, progress=progress, state=self.state, recorders=[self.store],
+                       keep_history=False)
+        finally:
+            self.store.release()
+
+
+def prepare_resume(path: str | Path, model: Model | ModelArrays | None = None, flush_every: int | None = None,
+                   contact_provider: ContactProvider | None = contacts_from_state) -> Resumption:
+    """Hold a results file and find where its run continues: its last intact checkpoint (see :func:`resume`).
+
+    Raises :class:`OutputInUseError` (another run holds the file),
+    :class:`ResultsWriteError` (its folder cannot be written) or
+    :class:`ResultsFileError` (not a results file, or damaged where it cannot be resumed).
+    """
+    path = Path(path)
+    with open_results(path) as f:  # for the store; read again below, under the lock
+        header = read_header(f, path)
+    store = ResultsStore(path, header.settings, flush_every=flush_every or header.flush_every,
+                         contact_provider=contact_provider, contact_every=header.contact_every,
+                         resume_from=ResumePoint(-1, -1, 0, 0, header.last_step))
+    try:
+        store.acquire()
+    except OutputInUseError:
+        raise
+    except ResultsWriteError as exc:
+        raise ResultsWriteError(f"{exc}; the file is unchanged: make the folder writable, then resume it again"
+                                ) from None
+    try:
+        return _prepare(path, store, model)
+    except BaseException:
+        store.release()
+        raise
+
+
+def _prepare(path: Path, store: ResultsStore, model: Model | ModelArrays | None) -> Resumption:
+    arrays = _resume_arrays(path) if model is None else (model.arrays() if isinstance(model, Model) else model)
+    with open_results(path) as f:
+        header = read_header(f, path)
+        found = inspect_results(f, path, keep=False)  # checks every row; keeps the steps only
+        problems = list(found.problems)
+        state, chosen = None, -1
+        for index in np.flatnonzero(found.checkpoint_intact & (found.checkpoint_steps <= found.last_step))[::-1]:
+            try:
+                state, chosen = checkpoint_state(f["checkpoint"], int(index), arrays, path), int(index)
+                break
+            except ResultsFileError as exc:
+                problems.append(str(exc).removeprefix(f"{path}: "))
+        if problems and state is not None:  # the intact rows to copy into a new file
+            found = inspect_results(f, path)
+    settings = header.settings
+    start = -1 if state is None else state.step
+    if state is None:
+        state = initial_state(arrays, settings.resolved_method())
+    rows = int(np.searchsorted(found.histories["step"], start, side="right")) if "step" in found.histories else 0
+    records = int(np.searchsorted(found.contacts["step"], start, side="right")) if found.contacts else 0
+    damaged = dataclasses.replace(found, problems=tuple(problems))
+    store.resume_from = ResumePoint(start, chosen, rows, records, header.last_step, damaged if problems else None)
+    then = (f"; resuming from the checkpoint at step {start}" if start >= 0
+            else "; restarting the run from its beginning")
+    remaining = settings if header.last_step < 0 else dataclasses.replace(
+        settings, n_steps=max(0, header.last_step - state.step))
+    return Resumption(path, arrays, remaining, state, store, start, damaged.message(path, then))
+
+
 def resume(path: str | Path, model: Model | ModelArrays | None = None, flush_every: int | None = None,
            progress: Callable[[int], None] | None = None,
            contact_provider: ContactProvider | None = contacts_from_state,
            ) -> Result:
-    """Continue the run of a results file from its last checkpoint up to its last step, appending to it.
+    """Continue the run of a results file from its last intact checkpoint up to its last step, appending to it.
 
-    A file without a checkpoint (a run stopped before its first flush) restarts from the initial state.
+    The run keeps every setting the file stores (its flush interval too, unless
+    ``flush_every`` is given). A file without an intact checkpoint (a run
+    stopped before its first flush, or damaged before it) restarts from the
+    initial state. A damaged file (:func:`~srdda.io.results_reader.inspect_results`)
+    gives a :class:`ResultsDamageWarning` naming the damage; its intact rows up
+    to the checkpoint are kept (in a new file that replaces it) and the rest
+    is run again, so it ends as the uninterrupted run would have.
 
     The model comes from the file unless given: its stored arrays, or, when it
     has loads given as Python functions, the stored model file text (a model
     built in Python with such loads must be given). Returns the :class:`Result` of the continued
     part, holding its first and last recorded steps (the file holds the whole run).
     """
-    arrays = _resume_arrays(path) if model is None else (model.arrays() if isinstance(model, Model) else model)
-    with open_results(path) as f:
-        settings = RunSettings(**json.loads(f["settings"].attrs["json"]))
-        last_step = int(f.attrs["last_step"])
-        stored_flush = int(f.attrs["flush_every"])
-        contact_every = int(f.attrs["contact_every"])
-        flushed = checkpoint_count(f["checkpoint"]) > 0
-    # a run stopped before its first flush restarts from its initial state
-    state = load_checkpoint(path, arrays) if flushed else initial_state(arrays, settings.resolved_method())
-    remaining = settings if last_step < 0 else dataclasses.replace(settings, n_steps=max(0, last_step - state.step))
-    store = ResultsStore(path, remaining, flush_every=flush_every or stored_flush, append=True,
-                         contact_provider=contact_provider, contact_every=contact_every)
-    return run(arrays, remaining, progress=progress, state=state, recorders=[store], keep_history=False)
+    prepared = prepare_resume(path, model, flush_every, contact_provider)
+    if prepared.damage is not None:
+        warnings.warn(prepared.damage, ResultsDamageWarning, stacklevel=2)
+    return prepared.run(progress)

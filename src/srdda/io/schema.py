@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, ValidationInfo, field_validator
 
 from ..settings import RunSettings
-from ..units import to_si
+from ..units import reject_boolean, to_si
 
 __all__ = ["ModelFile", "MaterialSection", "BlockSection", "PointRef", "FixedPointSection",
            "PointLoadSection", "PointSpringSection", "MeasuredPointSection", "JointMaterialSection",
@@ -45,6 +45,11 @@ Table = Annotated[list[tuple[Time, float, float]], AfterValidator(_strictly_incr
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_boolean(cls, value: object, info: ValidationInfo) -> object:
+        return reject_boolean(value, cls.model_fields[info.field_name].annotation)
 
 
 class MaterialSection(_Strict):
