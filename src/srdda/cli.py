@@ -21,6 +21,7 @@ from pydantic import ValidationError
 from tqdm import tqdm
 
 from . import __version__
+from .backends.arrays import DEVICES, GpuUnavailable, cupy_backend, gpu_problem
 from .integrators.methods import METHODS
 from .cli_results import animate_command, plot_command, report_paper, resume_run, vtk_command
 from .io.convert import convert
@@ -68,7 +69,8 @@ def _compile(model: Model, settings: RunSettings, source: str) -> ModelArrays:
     try:
         arrays = model.arrays()
         Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance))
-    except ModelError as exc:
+        settings.resolved_device(arrays.n_blocks)  # a GPU asked for where there is none
+    except (ModelError, GpuUnavailable) as exc:
         raise click.UsageError(f"{source}: {exc}") from None
     return arrays
 
@@ -150,8 +152,11 @@ def output_folder(model: str, out: str | None) -> Path:
               help="Continue the run of a results.h5 from its last flush (instead of MODEL).")
 @click.option("--flush-every", type=click.IntRange(min=1), default=100, show_default=True,
               help="Recorded steps between flushes of results.h5 (what a killed run can lose).")
+@click.option("--device", type=click.Choice(DEVICES), default=None,
+              help="Override the model's device: where the conjugate gradient runs (gpu: CuPy and a CUDA GPU).")
 def run_command(model: str | None, method: str | None, steps: int | None, end_time: float | None, dt: float | None,
-                out: str | None, overwrite: bool, quiet: bool, resume_file: str | None, flush_every: int) -> None:
+                out: str | None, overwrite: bool, quiet: bool, resume_file: str | None, flush_every: int,
+                device: str | None) -> None:
     """Run a model file; write results.h5 (see srdda plot/animate/vtk) and its time histories."""
     if resume_file is not None:
         if model is not None:
@@ -166,6 +171,8 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
         settings = _override(settings, "--method", method=method)
     if dt is not None:
         settings = _override(settings, "--dt", dt=dt)
+    if device is not None:
+        settings = _override(settings, "--device", device=device)
     if steps is not None or end_time is not None:
         settings = _override(settings, "--steps/--end-time", n_steps=steps,
                              end_time=settings.end_time if end_time is None else end_time)
@@ -243,9 +250,11 @@ def read_title(model: str) -> str:
 
 @main.command("info")
 def info_command() -> None:
-    """Versions and the linear solvers available here."""
+    """Versions, the linear solvers and the GPU available here."""
     click.echo(f"srdda {__version__}, Python {sys.version.split()[0]}, numpy {np.__version__}")
     click.echo(f"solvers: {', '.join(available_solvers())}")
+    problem = gpu_problem()
+    click.echo(f"gpu: {cupy_backend().device_name()}" if problem is None else f"gpu: none ({problem})")
     click.echo(f"paper examples: {', '.join(EXAMPLES)}")
 
 
@@ -383,17 +392,23 @@ def verify_command(cases: tuple[str, ...], as_json: bool, quick: bool, quiet: bo
 @click.option("--method", type=click.Choice(METHODS), default="dda0", show_default=True)
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=900.0, show_default=True,
               help="Wall-time limit per model (s); a model that reaches it is reported with the steps it made.")
+@click.option("--device", type=click.Choice(["cpu", "gpu"]), default="cpu", show_default=True,
+              help="Where the conjugate gradient runs; gpu needs CuPy and a CUDA GPU and adds the device and its "
+                   "memory to the rows.")
 def bench_command(as_json: bool, quick: bool, models: tuple[str, ...], steps: int | None, dt: float | None,
-                  method: str, timeout: float) -> None:
+                  method: str, timeout: float, device: str) -> None:
     """Time the standard benchmark models, each in a fresh process: steps/s, solves, memory (docs/performance.md)."""
     from .bench.runner import CASES, QUICK, format_table, run_cases
 
     unknown = [m for m in models if m not in CASES]
     if unknown:
         raise click.UsageError(f"unknown model(s) {', '.join(unknown)}; choose from {', '.join(CASES)}")
+    if device == "gpu" and gpu_problem() is not None:
+        raise BadInput(f"--device gpu: {gpu_problem()}")
     names = list(models) or list(QUICK if quick else CASES)
     rows = run_cases(names, steps, quick, method, dt, timeout,
-                     progress=None if as_json else lambda name: click.echo(f"running {name} ...", err=True))
+                     progress=None if as_json else lambda name: click.echo(f"running {name} ...", err=True),
+                     device=device)
     click.echo(json.dumps({"rows": rows}, indent=1) if as_json else format_table(rows))
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 from tqdm import tqdm
 
+from .backends.arrays import GpuUnavailable
 from .io.results_store import ResultsFileError, ResultsWriteError, StoredResult, read_results, resume
 
 __all__ = ["plot_command", "animate_command", "vtk_command", "resume_run", "report_paper"]
@@ -47,8 +48,8 @@ def resume_run(path: str, quiet: bool = False, flush_every: int | None = None) -
         with tqdm(total=max(0, int(stored.settings.n_steps) - done), disable=True if quiet else None, unit="step",
                   desc=f"resume {stored.method}") as bar:
             result = resume(path, flush_every=flush_every, progress=lambda _: bar.update(1))
-    except ResultsFileError as exc:
-        raise click.UsageError(str(exc)) from None
+    except (ResultsFileError, GpuUnavailable) as exc:  # a GPU run resumed where there is no GPU: one message
+        raise click.UsageError(f"{path}: {exc}" if isinstance(exc, GpuUnavailable) else str(exc)) from None
     except ResultsWriteError as exc:
         raise click.ClickException(str(exc)) from None
     final = read_results(path)

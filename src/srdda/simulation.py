@@ -47,7 +47,8 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     accepted step, ends the run (completed, that step recorded) when it returns True.
     """
     arrays = model.arrays() if isinstance(model, Model) else model
-    stepper = Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance))
+    solver = get_solver(settings.solver, settings.solver_tolerance, settings.resolved_device(arrays.n_blocks))
+    stepper = Stepper(arrays, settings, solver)
     state = state if state is not None else initial_state(arrays, stepper.method)
     result = Result(arrays.block_names, stepper.method.name, keep_history, keep_vertices=keep_vertices)
     sinks: list[Recorder] = [result, *recorders]
