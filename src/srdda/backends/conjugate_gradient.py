@@ -72,7 +72,6 @@ class BlockPatternCSR:
         row_ptr = xp.concatenate([row_start, xp.asarray([nnz], dtype=xp.int64)]).astype(index)
         self._values = xp.empty(nnz, dtype=xp.float64)
         self.matrix = backend.sparse.csr_matrix((self._values, columns, row_ptr), shape=(n, n))
-        self._xp = xp
 
     def same(self, matrix: sp.bsr_matrix) -> bool:
         """True if ``matrix`` has this block pattern."""
@@ -115,7 +114,7 @@ class ArrayConjugateGradient(ConjugateGradientSolver):
         self.uploaded_bytes = 0
         self.pattern_builds = 0
         self._pattern: BlockPatternCSR | None = None
-        self._jacobi: Any = None  # the block-diagonal CSR matrix of M⁻¹, kept while the block count is
+        self._jacobi: Any = None  # the block-diagonal CSR matrix of M⁻¹, kept while the system's size stays
 
     def _upload(self, array: np.ndarray) -> Any:
         self.uploaded_bytes += array.nbytes
