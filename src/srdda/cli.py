@@ -21,6 +21,7 @@ from pydantic import ValidationError
 from tqdm import tqdm
 
 from . import __version__
+from .backends.arrays import DEVICES, GpuUnavailable, cupy_backend, gpu_problem
 from .integrators.methods import METHODS
 from .cli_results import animate_command, plot_command, prepare_resume_run, report_paper, vtk_command
 from .io.convert import convert
@@ -68,7 +69,8 @@ def _compile(model: Model, settings: RunSettings, source: str) -> ModelArrays:
     try:
         arrays = model.arrays()
         Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance))
-    except ModelError as exc:
+        settings.resolved_device(arrays.n_blocks)  # a GPU asked for where there is none
+    except (ModelError, GpuUnavailable) as exc:
         raise click.UsageError(f"{source}: {exc}") from None
     return arrays
 
@@ -152,15 +154,18 @@ def output_folder(model: str, out: str | None) -> Path:
 @click.option("--flush-every", type=click.IntRange(min=1), default=None,
               help="Recorded steps between flushes of results.h5 (what a killed run can lose) [default: 100; with "
                    "--resume: the run's own].")
+@click.option("--device", type=click.Choice(DEVICES), default=None,
+              help="Override the model's device: where the conjugate gradient runs (gpu: CuPy and a CUDA GPU).")
 def run_command(model: str | None, method: str | None, steps: int | None, end_time: float | None, dt: float | None,
-                out: str | None, overwrite: bool, quiet: bool, resume_file: str | None, flush_every: int | None) -> None:
+                out: str | None, overwrite: bool, quiet: bool, resume_file: str | None, flush_every: int | None,
+                device: str | None) -> None:
     """Run a model file; write results.h5 (see srdda plot/animate/vtk) and its time histories."""
     if resume_file is not None:
         if model is not None:
             raise click.UsageError("give either MODEL or --resume RESULTS, not both")
         given = [name for name, value in (("--method", method), ("--steps", steps), ("--end-time", end_time),
-                                          ("--dt", dt), ("--out", out), ("--overwrite", overwrite))
-                 if value not in (None, False)]
+                                          ("--dt", dt), ("--device", device), ("--out", out),
+                                          ("--overwrite", overwrite)) if value not in (None, False)]
         if given:
             raise click.UsageError(f"--resume continues a run with the settings and the folder its file keeps; "
                                    f"{', '.join(given)} cannot change them (run the model again for that)")
@@ -172,7 +177,7 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
     else:
         if model is None:
             raise click.UsageError("missing MODEL (or --resume RESULTS)")
-        store, arrays, settings = _new_run(model, method, steps, end_time, dt, out, overwrite, flush_every)
+        store, arrays, settings = _new_run(model, method, steps, end_time, dt, device, out, overwrite, flush_every)
         store_path, total, desc, start = store.path, settings.n_steps, settings.method, f"writing {store.path}"
 
         def go(progress):
@@ -183,6 +188,8 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
         with tqdm(total=total, disable=True if quiet else None, unit="step", desc=desc) as bar:
             result = go(lambda _: bar.update(1))
         path, recorded = save_histories(store_path, result, out_dir)
+    except GpuUnavailable as exc:  # a GPU run resumed where there is none
+        raise BadInput(f"{store_path}: {exc}") from None
     except ResultsWriteError as exc:
         if exc.cut_short:  # HDF5 may crash in its exit handler after a flush that failed half-way: skip it
             click.echo(f"Error: {exc}", err=True)
@@ -198,13 +205,16 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
 
 
 def _new_run(model: str, method: str | None, steps: int | None, end_time: float | None, dt: float | None,
-             out: str | None, overwrite: bool, flush_every: int | None) -> tuple[ResultsStore, ModelArrays, RunSettings]:
+             device: str | None, out: str | None, overwrite: bool,
+             flush_every: int | None) -> tuple[ResultsStore, ModelArrays, RunSettings]:
     """The store (its output held), arrays and settings of a run of a model file; one message on any error."""
     mdl, settings = _load(model)
     if method:
         settings = _override(settings, "--method", method=method)
     if dt is not None:
         settings = _override(settings, "--dt", dt=dt)
+    if device is not None:
+        settings = _override(settings, "--device", device=device)
     if steps is not None or end_time is not None:
         settings = _override(settings, "--steps/--end-time", n_steps=steps,
                              end_time=settings.end_time if end_time is None else end_time)
@@ -265,9 +275,11 @@ def read_title(model: str) -> str:
 
 @main.command("info")
 def info_command() -> None:
-    """Versions and the linear solvers available here."""
+    """Versions, the linear solvers and the GPU available here."""
     click.echo(f"srdda {__version__}, Python {sys.version.split()[0]}, numpy {np.__version__}")
     click.echo(f"solvers: {', '.join(available_solvers())}")
+    problem = gpu_problem()
+    click.echo(f"gpu: {cupy_backend().device_name()}" if problem is None else f"gpu: none ({problem})")
     click.echo(f"paper examples: {', '.join(EXAMPLES)}")
 
 
@@ -407,18 +419,23 @@ def verify_command(cases: tuple[str, ...], as_json: bool, quick: bool, quiet: bo
               help="How the steps' contact problems are solved (default: each model's own setting).")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=900.0, show_default=True,
               help="Wall-time limit per model (s); a model that reaches it is reported with the steps it made.")
+@click.option("--device", type=click.Choice(["cpu", "gpu"]), default="cpu", show_default=True,
+              help="Where the conjugate gradient runs; gpu needs CuPy and a CUDA GPU and adds the device and its "
+                   "memory to the rows.")
 def bench_command(as_json: bool, quick: bool, models: tuple[str, ...], steps: int | None, dt: float | None,
-                  method: str, contact_solver: str | None, timeout: float) -> None:
+                  method: str, contact_solver: str | None, timeout: float, device: str) -> None:
     """Time the standard benchmark models, each in a fresh process: steps/s, solves, memory (docs/performance.md)."""
     from .bench.runner import CASES, QUICK, format_table, run_cases
 
     unknown = [m for m in models if m not in CASES]
     if unknown:
         raise click.UsageError(f"unknown model(s) {', '.join(unknown)}; choose from {', '.join(CASES)}")
+    if device == "gpu" and gpu_problem() is not None:
+        raise BadInput(f"--device gpu: {gpu_problem()}")
     names = list(models) or list(QUICK if quick else CASES)
     rows = run_cases(names, steps, quick, method, dt, timeout,
                      progress=None if as_json else lambda name: click.echo(f"running {name} ...", err=True),
-                     contact_solver=contact_solver)
+                     contact_solver=contact_solver, device=device)
     click.echo(json.dumps({"rows": rows}, indent=1) if as_json else format_table(rows))
 
 

@@ -7,9 +7,11 @@ writes ``steps`` for ``n_steps``), and the CLI replaces fields of it with
 is checked here, once, with a message naming the field: a time step that is
 not finite or out of range, a solver that is not installed, a step-cut factor
 that would never shrink the step, ``rho_inf`` with a scheme that ignores it,
-both ``contact_penalty`` and ``auto_penalty``, ``min_dt`` not below ``dt``
-(errors); contact settings with ``contacts = false`` and
-``secant_max_iterations`` without the secant linearisation (warnings: they
+both ``contact_penalty`` and ``auto_penalty``, ``min_dt`` not below ``dt``,
+``device = "gpu"`` with a solver that has no GPU backend (errors; a GPU asked
+for where CuPy or a CUDA device is missing is an error when the run starts,
+:meth:`RunSettings.resolved_device`); contact settings with ``contacts = false``
+and ``secant_max_iterations`` without the secant linearisation (warnings: they
 have no effect).
 Times in s, stiffnesses in N/m; a model file may write ``"2 ms"``.
 """
@@ -26,6 +28,7 @@ from pydantic.dataclasses import dataclass
 
 from .integrators.methods import METHODS, Method, method_preset
 from .integrators.schemes import SCHEMES
+from .backends.arrays import DEVICES, GPU_SOLVERS, resolve_device
 from .units import reject_boolean, to_si
 from .solvers import DEFAULT_TOLERANCE, SOLVERS, available_solvers
 
@@ -88,6 +91,9 @@ class RunSettings:
     # the iterative backends (cg-amg, cg-jacobi; auto above ITERATIVE_LIMIT blocks) stop when every unknown
     # of the increment is estimated within this of the exact solution (m): docs/performance.md
     solver_tolerance: Annotated[Metres, Field(gt=0, le=1.0)] = DEFAULT_TOLERANCE
+    # where the conjugate gradient runs: "cpu", "gpu" (CuPy and a CUDA GPU, srdda[gpu]) or "auto" (the GPU for
+    # models of GPU_MIN_BLOCKS blocks or more when one is present; docs/performance.md, *On a GPU*)
+    device: Literal[DEVICES] = "auto"
     # The secant pass stops when |Δθ|·|δθ| (δθ: change of the rotation increment between two solves)
     # is below this: the mismatch between the linearised and the exact rotation displacement of a
     # point, per metre of lever arm, is about half of it.
@@ -132,6 +138,10 @@ class RunSettings:
             raise ValueError(f"rho_inf = {self.rho_inf} has no effect with the 'shi' time scheme (method "
                              f"{self.method!r}, scheme {method.scheme.name!r}); set rho_inf = 1, or use scheme "
                              "'paper' or 'chung-hulbert'")
+        if self.device == "gpu" and self.solver not in GPU_SOLVERS:
+            raise ValueError(f"device = 'gpu' runs the block-Jacobi conjugate gradient on the GPU, and solver "
+                             f"{self.solver!r} has none: choose solver {' or '.join(map(repr, GPU_SOLVERS))}, "
+                             "or device 'cpu'")
         if self.contact_penalty is not None and self.auto_penalty is not None:
             raise ValueError(f"give contact_penalty ({self.contact_penalty:g} N/m) or auto_penalty "
                              f"({self.auto_penalty:g} × the largest Young's modulus), not both")
@@ -152,6 +162,15 @@ class RunSettings:
     def resolved_method(self) -> Method:
         """The method preset with this run's scheme and linearisation overrides."""
         return method_preset(self.method, self.rho_inf, self.scheme, self.linearization)
+
+    def resolved_device(self, n_blocks: int) -> str:
+        """Where the linear solves of a model of ``n_blocks`` blocks run: "cpu" or "gpu" (``device`` resolved).
+
+        Raises :class:`~srdda.backends.arrays.GpuUnavailable` (a ValueError naming the field) for
+        ``device = "gpu"`` where CuPy or a CUDA device is missing: checked when a run starts, not here,
+        so that the settings stored with a GPU run's results still read on a machine without one.
+        """
+        return resolve_device(self.device, self.solver, n_blocks)
 
     @property
     def last_step_limit(self) -> float:

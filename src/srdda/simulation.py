@@ -57,7 +57,8 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     """
     arrays = model.arrays() if isinstance(model, Model) else model
     terms = [*default_terms(arrays, settings, contact_law), *extra_terms]
-    stepper = Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance), terms)
+    solver = get_solver(settings.solver, settings.solver_tolerance, settings.resolved_device(arrays.n_blocks))
+    stepper = Stepper(arrays, settings, solver, terms)
     state = state if state is not None else initial_state(arrays, stepper.method)
     result = Result(arrays.block_names, stepper.method.name, keep_history, keep_vertices=keep_vertices)
     sinks: list[Recorder] = [result, *recorders]

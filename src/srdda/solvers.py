@@ -24,6 +24,8 @@ the last solution). Backends (measured in docs/performance.md):
   backend (pardiso, cholmod, superlu) up to ``ITERATIVE_LIMIT`` blocks,
   ``cg-jacobi`` above (falling back to the direct backend for a solve it
   cannot make).
+* ``device="gpu"`` (``cg-jacobi`` and ``auto``): the same conjugate gradient
+  with its iterations on a CUDA GPU through CuPy (:mod:`srdda.backends`).
 
 A system with constraint rows (``system.n_constraints > 0``) is the saddle
 point [[A, Cᵀ], [C, 0]]·[Δd; μ] = [F; g]; ``rhs`` then has n + nc entries and
@@ -447,10 +449,11 @@ class AutoSolver:
 
     name = "auto"
 
-    def __init__(self, tolerance: float = DEFAULT_TOLERANCE) -> None:
+    def __init__(self, tolerance: float = DEFAULT_TOLERANCE, iterative: LinearSolver | None = None) -> None:
         self.dense = DenseSolver()
         self.direct = _best_direct()
-        self.iterative = ConjugateGradientSolver("jacobi", tolerance)
+        # ``iterative``: the conjugate gradient of large systems (a GPU one, srdda.backends); default the CPU's
+        self.iterative = ConjugateGradientSolver("jacobi", tolerance) if iterative is None else iterative
         self.fallbacks = 0
 
     def choose(self, system: BlockSystem) -> LinearSolver:
@@ -487,10 +490,20 @@ def available_solvers() -> list[str]:
     return [n for n in _BACKENDS if n not in _MODULES or importlib.util.find_spec(_MODULES[n]) is not None]
 
 
-def get_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE) -> LinearSolver:
-    """The backend called ``name`` (see module doc); ``tolerance`` (m) is the iterative backends' stopping rule."""
+def get_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE, device: str = "cpu") -> LinearSolver:
+    """The backend called ``name`` (see module doc); ``tolerance`` (m) is the iterative backends' stopping rule.
+
+    ``device="gpu"``: ``cg-jacobi``, or ``auto`` with its conjugate gradient, on a CUDA GPU through CuPy
+    (:func:`srdda.backends.conjugate_gradient.gpu_solver`; ``RunSettings.resolved_device`` chooses).
+    """
     if name not in _BACKENDS:
         raise ValueError(f"unknown solver {name!r}; choose one of {sorted(_BACKENDS)}")
+    if device == "gpu":
+        from .backends.conjugate_gradient import gpu_solver
+
+        return gpu_solver(name, tolerance)
+    if device != "cpu":
+        raise ValueError(f"unknown device {device!r} for a solver; choose 'cpu' or 'gpu'")
     if name not in available_solvers():
         raise ValueError(f"solver {name!r} is not installed (pip install srdda[{name}])")
     return _BACKENDS[name](tolerance) if name in _ITERATIVE else _BACKENDS[name]()

@@ -24,6 +24,9 @@ nothing is patched in the parent):
   ``cg_iterations_per_solve`` divides by the solves it made. With
   ``solves_per_step`` it tells whether a slow model pays for many solves or
   for slow ones;
+* ``device``: where the conjugate gradient ran: "cpu", or the GPU's name (``--device gpu``,
+  :mod:`srdda.backends`); ``gpu_peak_mb``: the high-water mark of CuPy's memory pool (the GPU memory
+  the run's arrays took; None on the CPU); ``gpu_upload_mb``: what the solves moved to the GPU;
 * ``share_*``: the part of the run's wall time spent (exclusively, nested timed
   calls subtracted) in contact detection (``ContactModel.prepare``),
   assembly (``Stepper.assemble`` and ``base_system``: every term's
@@ -163,8 +166,8 @@ class Probe:
             return counted_prepare
 
         def timed_solvers(get_solver: Callable[..., Any]) -> Callable[..., Any]:
-            def timed_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE) -> Any:
-                return _TimedSolver(get_solver(name, tolerance), self)
+            def timed_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE, device: str = "cpu") -> Any:
+                return _TimedSolver(get_solver(name, tolerance, device), self)
             return timed_solver
 
         def timer(phase: str) -> Callable[[Any], Any]:
@@ -202,6 +205,17 @@ def cg_iterations(solver: Any) -> list[int]:
     return list(getattr(getattr(solver, "iterative", solver), "iterations", []))
 
 
+def device_columns(solvers: list[Any]) -> dict[str, Any]:
+    """``device``, ``gpu_peak_mb`` and ``gpu_upload_mb`` of a row (module doc) from the run's solvers."""
+    devices = [s for s in (getattr(solver, "iterative", solver) for solver in solvers) if hasattr(s, "backend")]
+    if not devices:
+        return {"device": "cpu", "gpu_peak_mb": None, "gpu_upload_mb": None}
+    backend = devices[0].backend
+    peak = backend.memory_high_water_bytes()
+    return {"device": backend.device_name(), "gpu_peak_mb": None if peak is None else peak / 2**20,
+            "gpu_upload_mb": sum(s.uploaded_bytes for s in devices) / 2**20}
+
+
 def peak_memory_mb() -> float:
     """Peak resident memory of this process (MB).
 
@@ -220,24 +234,26 @@ def peak_memory_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
 
 
-def _warm_up(dim: int) -> None:
-    """Compile the numba kernels (contact detection) on a tiny wall of the model's dimension, outside the timing."""
+def _warm_up(dim: int, device: str) -> None:
+    """Compile the numba kernels (contact detection) on a tiny wall of the model's dimension, outside the timing;
+    on a GPU also CuPy's kernels, through its conjugate gradient."""
     model, settings = brick_wall(2, 2) if dim == 2 else english_bond_wall(1, 2)
-    simulation.run(model, replace(settings, n_steps=2))
+    simulation.run(model, replace(settings, n_steps=2, device=device,
+                                  solver="cg-jacobi" if device == "gpu" else settings.solver))
 
 
 def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout: float,
-            contact_solver: str | None = None) -> dict[str, Any]:
-    """Build and run one model in this process; the row of ``srdda bench --json`` (``contact_solver`` None:
-    the model's own)."""
+            contact_solver: str | None = None, device: str = "cpu") -> dict[str, Any]:
+    """Build and run one model in this process, its solves on ``device``; the row of ``srdda bench --json``
+    (``contact_solver`` None: the model's own)."""
     start = time.perf_counter()
-    _warm_up(case.dim)
+    _warm_up(case.dim, device)
     t0 = time.perf_counter()
     model, settings = case.build()
     arrays = model.arrays()
     build_s = time.perf_counter() - t0
     settings = replace(settings, n_steps=steps, method=method, dt=settings.dt if dt is None else dt,
-                       record_every=max(steps, 1),
+                       record_every=max(steps, 1), device=device,
                        contact_solver=settings.contact_solver if contact_solver is None else contact_solver)
     probe = Probe(deadline=start + timeout)
     note = ""
@@ -267,7 +283,7 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
         "cg_iterations": int(sum(iterations)),
         "cg_iterations_per_solve": float(np.mean(iterations)) if iterations else None,
         "wall_s": wall, "cpu_s": cpu, "steps_per_cpu_s": n / cpu if cpu > 0 else 0.0, "build_s": build_s,
-        "status": status, "note": note,
+        "status": status, "note": note, **device_columns(probe.solvers),
     }
     for phase in PHASES:
         row[f"share_{phase}"] = probe.seconds[phase] / wall if wall > 0 else 0.0
@@ -275,16 +291,17 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
     return row
 
 
-def _failed_row(case: BenchCase, steps: int, method: str, dt: float | None, note: str) -> dict[str, Any]:
+def _failed_row(case: BenchCase, steps: int, method: str, dt: float | None, device: str,
+                note: str) -> dict[str, Any]:
     return {"model": case.name, "dim": case.dim, "blocks": None, "method": method, "steps": 0, "dt": dt,
             "sim_time": 0.0, "steps_per_s": 0.0, "solves_per_step": None, "rejected_steps": None,
-            "peak_mb": None, "steps_requested": steps, "status": "failed", "note": note}
+            "peak_mb": None, "steps_requested": steps, "device": device, "status": "failed", "note": note}
 
 
 def run_cases(names: list[str], steps: int | None, quick: bool, method: str, dt: float | None,
               timeout: float, progress: Callable[[str], None] | None = None,
-              contact_solver: str | None = None) -> list[dict[str, Any]]:
-    """Run each named case in its own child process; one row per case, in order."""
+              contact_solver: str | None = None, device: str = "cpu") -> list[dict[str, Any]]:
+    """Run each named case in its own child process, its solves on ``device``; one row per case, in order."""
     rows = []
     for name in names:
         case = CASES[name]
@@ -292,18 +309,19 @@ def run_cases(names: list[str], steps: int | None, quick: bool, method: str, dt:
         if progress is not None:
             progress(name)
         cmd = [sys.executable, "-m", "srdda.bench.runner", name, "--steps", str(n), "--method", method,
-               "--timeout", str(timeout)] + ([] if dt is None else ["--dt", repr(dt)]) \
+               "--timeout", str(timeout), "--device", device] + ([] if dt is None else ["--dt", repr(dt)]) \
             + ([] if contact_solver is None else ["--contact-solver", contact_solver])
         try:
             # the child stops itself at the limit (between solves); this margin covers one long solve
             done = subprocess.run(cmd, capture_output=True, text=True, timeout=2.0 * timeout + 120.0)
         except subprocess.TimeoutExpired:
-            rows.append(_failed_row(case, n, method, dt, f"killed: no answer within {2.0 * timeout + 120.0:g} s"))
+            rows.append(_failed_row(case, n, method, dt, device,
+                                    f"killed: no answer within {2.0 * timeout + 120.0:g} s"))
             continue
         lines = done.stdout.strip().splitlines()
         if done.returncode != 0 or not lines:
             err = done.stderr.strip().splitlines()
-            rows.append(_failed_row(case, n, method, dt,
+            rows.append(_failed_row(case, n, method, dt, device,
                                     f"child exited with {done.returncode}: {err[-1] if err else 'no message'}"))
             continue
         rows.append(json.loads(lines[-1]))
@@ -315,19 +333,23 @@ def _num(x: Any, fmt: str) -> str:
 
 
 def format_table(rows: list[dict[str, Any]]) -> str:
-    """The rows as an aligned text table (time shares in %)."""
-    header = ("model", "blocks", "method", "contacts", "steps", "dt", "sim time", "steps/s", "solves/step", "CG it/solve", "rejected",
-              "detect%", "assembly%", "solve%", "open-close%", "other%", "peak MB", "note")
+    """The rows as an aligned text table (time shares in %); the device and GPU memory when a row ran on a GPU."""
+    on_gpu = any(r.get("device", "cpu") != "cpu" for r in rows)
+    gpu_header = ("device", "GPU MB") if on_gpu else ()
+    header = ("model", "blocks", "method", "contacts", "steps", "dt", "sim time", "steps/s", "solves/step",
+              "CG it/solve", "rejected", "detect%", "assembly%", "solve%", "open-close%", "other%", "peak MB",
+              *gpu_header, "note")
     lines = [header]
     for r in rows:
         shares = [_num(None if f"share_{p}" not in r else 100 * r[f"share_{p}"], ".0f")
                   for p in (*PHASES, "other")]
+        gpu = (r.get("device", "cpu"), _num(r.get("gpu_peak_mb"), ".0f")) if on_gpu else ()
         lines.append((r["model"], _num(r["blocks"], "d"), r["method"], r.get("contact_solver", "-"),
                       f"{r['steps']}/{r.get('steps_requested', '-')}",
                       _num(r["dt"], "g"), _num(r["sim_time"], ".4g"), _num(r["steps_per_s"], ".3g"),
                       _num(r["solves_per_step"], ".1f"), _num(r.get("cg_iterations_per_solve"), ".0f"),
                       _num(r["rejected_steps"], "d"), *shares,
-                      _num(r["peak_mb"], ".0f"), r.get("note", "")))
+                      _num(r["peak_mb"], ".0f"), *gpu, r.get("note", "")))
     widths = [max(len(str(line[i])) for line in lines) for i in range(len(header))]
     return "\n".join("  ".join(str(c).ljust(w) for c, w in zip(line, widths)).rstrip() for line in lines)
 
@@ -341,8 +363,10 @@ def _main() -> None:
     ap.add_argument("--dt", type=float, default=None)
     ap.add_argument("--timeout", type=float, required=True)
     ap.add_argument("--contact-solver", default=None)
+    ap.add_argument("--device", choices=("cpu", "gpu"), default="cpu")
     args = ap.parse_args()
-    row = measure(CASES[args.model], args.steps, args.method, args.dt, args.timeout, args.contact_solver)
+    row = measure(CASES[args.model], args.steps, args.method, args.dt, args.timeout, args.contact_solver,
+                  args.device)
     print(json.dumps(row), flush=True)
 
 
