@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .candidates import grow_boxes, room_for_row
+from .candidates import grow_boxes, push_row
 
 __all__ = ["candidate_pairs_3d"]
 
@@ -35,14 +35,6 @@ def _overlap(boxes, i, j):
         if boxes[i, k] > boxes[j, k + 3] or boxes[j, k] > boxes[i, k + 3]:
             return False
     return True
-
-
-@njit(cache=True)
-def _push(buf, n, i, j):
-    buf = room_for_row(buf, n)
-    buf[n, 0] = min(i, j)
-    buf[n, 1] = max(i, j)
-    return buf
 
 
 @njit(cache=True)
@@ -105,7 +97,7 @@ def _grid_pairs(boxes, keys, owner, span, h, origin, movable):
                 y = int(np.floor((max(boxes[i, 1], boxes[j, 1]) - origin[1]) / h))
                 z = int(np.floor((max(boxes[i, 2], boxes[j, 2]) - origin[2]) / h))
                 if (x * span[1] + y) * span[2] + z == cell:
-                    buf = _push(buf, n, i, j)
+                    buf = push_row(buf, n, (min(i, j), max(i, j)))
                     n += 1
         start = stop
     return buf[:n].copy()
@@ -123,7 +115,7 @@ def _large_pairs(boxes, large, order, xmin_sorted, movable):
             if j == i or (large[j] and j < i) or boxes[j, 3] < boxes[i, 0]:
                 continue
             if (movable[i] or movable[j]) and _overlap(boxes, i, j):
-                buf = _push(buf, n, i, j)
+                buf = push_row(buf, n, (min(i, j), max(i, j)))
                 n += 1
     return buf[:n].copy()
 

@@ -25,7 +25,7 @@ from numba import njit
 if TYPE_CHECKING:
     from ..model import ModelArrays
 
-__all__ = ["block_boxes", "grow_boxes", "boxes_within", "KeptCandidates", "PairFinder", "pair_keys", "room_for_row"]
+__all__ = ["block_boxes", "grow_boxes", "boxes_within", "KeptCandidates", "PairFinder", "pair_keys", "push_row", "both_ways"]
 
 GROWTH = 2  # a full row buffer is replaced by one this many times as long
 
@@ -107,11 +107,24 @@ class PairFinder:
 
 
 @njit(cache=True)
-def room_for_row(buf: np.ndarray, n: int) -> np.ndarray:
-    """``buf`` if row ``n`` fits in it, else a copy of its first n rows in a buffer twice as long: the rows the
-    compiled broad and narrow phases find, without knowing how many they will find."""
-    if n < buf.shape[0]:
-        return buf
-    bigger = np.empty((GROWTH * buf.shape[0], buf.shape[1]), dtype=buf.dtype)
-    bigger[:n] = buf[:n]
-    return bigger
+def push_row(buf: np.ndarray, n: int, row: tuple) -> np.ndarray:
+    """``buf`` with ``row`` (a tuple of integers) written as its row ``n``, in a copy twice as long when row n
+    would not fit: the rows the compiled broad and narrow phases find, without knowing how many they will find."""
+    if n >= buf.shape[0]:
+        bigger = np.empty((GROWTH * buf.shape[0], buf.shape[1]), dtype=buf.dtype)
+        bigger[:n] = buf[:n]
+        buf = bigger
+    for j in range(len(row)):
+        buf[n, j] = row[j]
+    return buf
+
+
+@njit(cache=True)
+def both_ways(pairs: np.ndarray) -> np.ndarray:
+    """The candidate pairs (k, 2) each both ways round, (a, b) then (b, a): the order the narrow phases test
+    them in (a's vertices against b, then b's against a)."""
+    out = np.empty((2 * pairs.shape[0], 2), dtype=pairs.dtype)
+    for k in range(pairs.shape[0]):
+        out[2 * k, 0], out[2 * k, 1] = pairs[k, 0], pairs[k, 1]
+        out[2 * k + 1, 0], out[2 * k + 1, 1] = pairs[k, 1], pairs[k, 0]
+    return out

@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .candidates import room_for_row
+from .candidates import both_ways, push_row
 
 __all__ = ["VERTEX_EDGE", "VERTEX_VERTEX", "FOUND_VERTEX", "FOUND_EDGE", "FOUND_KIND", "FOUND_FIELDS",
            "narrow_phase_2d"]
@@ -180,15 +180,6 @@ def _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
 
 
 @njit(cache=True)
-def _push(buf, n, v, e, kind):
-    buf = room_for_row(buf, n)
-    buf[n, 0] = v
-    buf[n, 1] = e
-    buf[n, 2] = kind
-    return buf
-
-
-@njit(cache=True)
 def narrow_phase_2d(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_tol, max_depth):
     """Contacts (k, 3) [vertex, edge start, kind] of the candidate ``pairs`` (k, 2).
 
@@ -198,32 +189,29 @@ def narrow_phase_2d(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_
     """
     buf = np.empty((max(16, 4 * len(pairs)), 3), dtype=np.int64)
     n = 0
-    for k in range(len(pairs)):
-        for side in range(2):
-            a = pairs[k, side]
-            b = pairs[k, 1 - side]
-            for v in range(block_ptr[a], block_ptr[a + 1]):
-                x = X[v, 0]
-                y = X[v, 1]
-                if x < boxes[b, 0] - d0 or x > boxes[b, 2] + d0 or y < boxes[b, 1] - d0 or y > boxes[b, 3] + d0:
-                    continue
-                d02 = d0 * d0
-                for e in range(block_ptr[b], block_ptr[b + 1]):
-                    x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
-                    if (x - x0) ** 2 + (y - y0) ** 2 < d02:  # vertex-vertex with q = e
-                        chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
-                        if chosen >= 0 and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
-                                and _plausible(X, block_ptr, nxt, prv, b, v, chosen, max_depth, sin_tol):
-                            buf = _push(buf, n, v, chosen, VERTEX_VERTEX)
-                            n += 1
-                    t = ((x - x0) * dx + (y - y0) * dy) / (length * length)
-                    if t <= 0.0 or t >= 1.0:
-                        continue
-                    nx = dy / length
-                    ny = -dx / length
-                    dist = nx * (x - x0) + ny * (y - y0)
-                    if abs(dist) < d0 and _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol) \
-                            and _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
-                        buf = _push(buf, n, v, e, VERTEX_EDGE)
+    for a, b in both_ways(pairs):
+        for v in range(block_ptr[a], block_ptr[a + 1]):
+            x = X[v, 0]
+            y = X[v, 1]
+            if x < boxes[b, 0] - d0 or x > boxes[b, 2] + d0 or y < boxes[b, 1] - d0 or y > boxes[b, 3] + d0:
+                continue
+            d02 = d0 * d0
+            for e in range(block_ptr[b], block_ptr[b + 1]):
+                x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
+                if (x - x0) ** 2 + (y - y0) ** 2 < d02:  # vertex-vertex with q = e
+                    chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
+                    if chosen >= 0 and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
+                            and _plausible(X, block_ptr, nxt, prv, b, v, chosen, max_depth, sin_tol):
+                        buf = push_row(buf, n, (v, chosen, VERTEX_VERTEX))
                         n += 1
+                t = ((x - x0) * dx + (y - y0) * dy) / (length * length)
+                if t <= 0.0 or t >= 1.0:
+                    continue
+                nx = dy / length
+                ny = -dx / length
+                dist = nx * (x - x0) + ny * (y - y0)
+                if abs(dist) < d0 and _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol) \
+                        and _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
+                    buf = push_row(buf, n, (v, e, VERTEX_EDGE))
+                    n += 1
     return buf[:n].copy()

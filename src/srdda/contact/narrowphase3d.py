@@ -61,7 +61,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .candidates import room_for_row
+from .candidates import both_ways, push_row
 
 __all__ = ["VERTEX_FACE", "EDGE_EDGE", "FOUND_FIELDS", "narrow_phase_3d"]
 
@@ -141,17 +141,6 @@ def _height_over(block_face_ptr, face_normal, face_point, b, x, y, z):
 
 
 @njit(cache=True)
-def _push(buf, n, kind, fa, fb, a, b):
-    buf = room_for_row(buf, n)
-    buf[n, 0] = kind
-    buf[n, 1] = fa
-    buf[n, 2] = fb
-    buf[n, 3] = a
-    buf[n, 4] = b
-    return buf
-
-
-@njit(cache=True)
 def _in_normal_cone(mx, my, mz, e, edge_v0, edge_v1, edge_faces, face_normal, X, sin_tol):
     """Does the unit vector m lie between the outward normals of edge e's two faces (to the tolerance)?"""
     ex, ey, ez = _sub(X, edge_v1[e], edge_v0[e])
@@ -210,14 +199,14 @@ def _vertex_face(X, a, b, block_ptr, block_face_ptr, face_ptr, face_vertex, face
                 if not plausible:
                     continue
             if out <= inside_tol:
-                buf = _push(buf, n, VERTEX_FACE, v, f, a, b)
+                buf = push_row(buf, n, (VERTEX_FACE, v, f, a, b))
                 n += 1
                 interior += 1
             elif d > band_distance:
                 band_distance = d
                 band = f
         if interior == 0 and band >= 0:
-            buf = _push(buf, n, VERTEX_FACE, v, band, a, b)
+            buf = push_row(buf, n, (VERTEX_FACE, v, band, a, b))
             n += 1
     return buf, n
 
@@ -280,7 +269,7 @@ def _edge_edge(X, a, b, block_edge_ptr, edge_v0, edge_v1, edge_faces, edge_conve
             if not (_in_normal_cone(mx, my, mz, eb, edge_v0, edge_v1, edge_faces, face_normal, X, sin_tol)
                     and _in_normal_cone(-mx, -my, -mz, ea, edge_v0, edge_v1, edge_faces, face_normal, X, sin_tol)):
                 continue
-            buf = _push(buf, n, EDGE_EDGE, ea, eb, a, b)
+            buf = push_row(buf, n, (EDGE_EDGE, ea, eb, a, b))
             n += 1
     return buf, n
 
@@ -301,14 +290,14 @@ def narrow_phase_3d(X, pairs, boxes, block_ptr, block_face_ptr, face_ptr, face_v
                 break
     buf = np.empty((max(16, 8 * len(pairs)), 5), dtype=np.int64)
     n = 0
-    for k in range(len(pairs)):
-        for side in range(2):
-            a = pairs[k, side]
-            b = pairs[k, 1 - side]
-            buf, n = _vertex_face(X, a, b, block_ptr, block_face_ptr, face_ptr, face_vertex, face_normal,
-                                  face_point, neighbour_ptr, neighbour, vertex_convex, block_convex, boxes, d0,
-                                  sin_tol, max_depth, buf, n)
-        buf, n = _edge_edge(X, pairs[k, 0], pairs[k, 1], block_edge_ptr, edge_v0, edge_v1, edge_faces, edge_convex,
-                            block_face_ptr, face_normal, face_point, block_convex, boxes, d0, sin_tol, max_depth,
-                            buf, n)
+    ordered = both_ways(pairs)
+    for m in range(len(ordered)):
+        a, b = ordered[m, 0], ordered[m, 1]
+        buf, n = _vertex_face(X, a, b, block_ptr, block_face_ptr, face_ptr, face_vertex, face_normal,
+                              face_point, neighbour_ptr, neighbour, vertex_convex, block_convex, boxes, d0,
+                              sin_tol, max_depth, buf, n)
+        if m % 2 == 1:  # after both ways round, the pair's crossing edges once
+            buf, n = _edge_edge(X, b, a, block_edge_ptr, edge_v0, edge_v1, edge_faces, edge_convex,
+                                block_face_ptr, face_normal, face_point, block_convex, boxes, d0, sin_tol, max_depth,
+                                buf, n)
     return buf[:n].copy()
