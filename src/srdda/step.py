@@ -25,7 +25,7 @@ from .assembly.blocks import GyroscopicTerm, block_terms
 from .assembly.system import BlockSystem
 from .constraints import point_terms
 from .contact.law import ContactLaw
-from .contact.newton import NewtonContactModel
+from .contact.newton import NewtonContactModel, NewtonContactTerm
 from .contact.pipeline import ContactModel, ContactParameters, ContactTerm
 from .integrators.methods import Method
 from .integrators.secant import SecantPass
@@ -104,10 +104,11 @@ def default_terms(arrays: ModelArrays, settings: RunSettings, contact_law: Conta
         terms.append(GyroscopicTerm(settings.secant_tolerance))
     if settings.contacts and arrays.n_blocks > 1:
         w0 = model_half_height(arrays.vertices)
-        kind = NewtonContactModel if settings.contact_solver == "newton" else ContactModel
-        model = kind(arrays, contact_parameters(arrays, settings, w0), contact_law)
+        newton = settings.contact_solver == "newton"
+        model = (NewtonContactModel if newton else ContactModel)(arrays, contact_parameters(arrays, settings, w0),
+                                                                 contact_law)
         if np.any(model.can_touch):
-            terms.append(ContactTerm(model, settings.open_close_max_iterations,
+            terms.append((NewtonContactTerm if newton else ContactTerm)(model, settings.open_close_max_iterations,
                                      settings.max_displacement_ratio * w0, settings.dt))
     return terms
 

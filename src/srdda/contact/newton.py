@@ -52,13 +52,13 @@ from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scat
 from ..term import StepContext
 from .law import ContactLaw, JointResponse
 from .openclose import LOCKED, OPEN, SLIDING, magnitudes, negligible_force
-from .pipeline import ContactKind, ContactModel, ContactParameters, ContactSet, ContactStep
+from .pipeline import ContactKind, ContactModel, ContactParameters, ContactSet, ContactStep, ContactTerm
 from .record import ContactRecord
 
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-__all__ = ["NewtonContactModel", "NewtonContactStep", "ARMIJO", "MIN_STEP"]
+__all__ = ["NewtonContactModel", "NewtonContactStep", "NewtonContactTerm", "ARMIJO", "MIN_STEP"]
 
 UNBOUNDED = 1e300  # the yield force of a contact whose normal force no solve has given yet (it sticks)
 ARMIJO = 1e-4  # a step must decrease Π by this fraction of what its slope at the start promises (Armijo)
@@ -73,8 +73,6 @@ def _units(vectors: np.ndarray) -> np.ndarray:
 
 class NewtonContactStep(ContactStep):
     """The contacts of one step attempt as one complementarity problem (module doc)."""
-
-    line_search = True
 
     def __init__(self, record: ContactRecord, kind: ContactKind, params: ContactParameters,
                  response: JointResponse, law: ContactLaw, state: np.ndarray, direction: np.ndarray,
@@ -341,3 +339,18 @@ class NewtonContactModel(ContactModel):
         reference[kept] = previous.reference[old[kept]]
         return NewtonContactStep(record, self.kind, self.params, response, self.law, state, direction, reference,
                                  bonded, normal_force, kept)
+
+
+class NewtonContactTerm(ContactTerm):
+    """The contact term of ``contact_solver = "newton"``: each solve's increments damped by the contacts' line
+    search (:meth:`NewtonContactStep.step_length`)."""
+
+    step: NewtonContactStep | None
+
+    @property
+    def line_search(self) -> bool:
+        return self.step is not None
+
+    def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
+        assert self.step is not None
+        return self.step.step_length(dd_before, delta, curvature)

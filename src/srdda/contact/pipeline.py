@@ -18,7 +18,6 @@ by the shape types); docs/contacts.md gives the reason of each difference.
 """
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
@@ -125,12 +124,6 @@ class ContactSet:
 
 class ContactStep:
     """The contacts of one step attempt: springs, friction and the open-close iteration."""
-
-    line_search = False  # the open-close takes every solve whole
-
-    def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
-        """The whole solve (no line search)."""
-        return 1.0
 
     def __init__(self, record: ContactRecord, kind: ContactKind, params: ContactParameters,
                  response: JointResponse, law: ContactLaw, state: np.ndarray, direction: np.ndarray,
@@ -501,14 +494,6 @@ class ContactTerm(Term):
     @property
     def at_points(self) -> bool:
         return self.step is not None
-
-    @property
-    def line_search(self) -> bool:
-        return self.step is not None and self.step.line_search
-
-    def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
-        assert self.step is not None
-        return self.step.step_length(dd_before, delta, curvature)
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         if self.step is not None:
