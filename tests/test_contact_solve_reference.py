@@ -3,25 +3,20 @@
 On small random models (2D polygons and 3D boxes near a fixed base, with random gaps, penetrations, speeds,
 friction, cohesion and tension) one step's contact problem, the Tresca problem with the yield forces' N* held
 at given values, is solved twice: by srdda's Newton iteration (:mod:`srdda.contact.newton`) and as the convex
-program it is, written out in cvxpy and solved by clarabel (an interior-point conic solver):
-
-    min  ½ xᵀAx − Fᵀx + Σ_c [ ½k_n (g_c − z_c)² + T_c z_c + ½k_s |s_c − p_c|² + τ_c |p_c| ] / c_p,
-    z ≥ 0,   g = g_0 + c_p N x,   s = s_e0 + c_p S x,
-
-(the penalty springs' potentials as Moreau envelopes: z the part of the gap beyond the tensile strength's
-stretch, p the plastic slip). A, F: every other term of the step; N, S: the contacts' rows. The Newton
-iteration (stopped at force errors below 1e-9 of the blocks' weight) must reach a Π no higher than
-clarabel's (asked for 1e-10 of Π), and the increments must agree to what that accuracy allows.
+program it is (:mod:`srdda.contact.conic`: the springs' potentials as Moreau envelopes, a quadratic program in
+2D and a second-order cone program in 3D), written out in cvxpy and solved by clarabel (an interior-point conic
+solver). The Newton iteration (stopped at force errors below 1e-9 of the blocks' weight) must reach a Π no
+higher than clarabel's (asked for 1e-10 of Π), and the increments must agree to what that accuracy allows.
 """
 from __future__ import annotations
 
-import cvxpy as cp
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import srdda
+from srdda.contact.conic import step_problem
 from srdda.contact.newton import NewtonContactModel
 from srdda.contact.pipeline import ContactTerm
 from srdda.geometry.polyhedron import box
@@ -103,52 +98,10 @@ def _newton_and_reference(dim, seed, n_blocks):
     if contact.step is None or outcome.status != "accepted":
         return None
     step, ctx = contact.step, captured["ctx"]
-    others = [t for t in terms if t is not contact]
-    system = stepper.assemble(ctx, others)
-    a_matrix, f = system.to_dense(), system.rhs.ravel()
-    springs = step._springs
-    n, k = len(step), step.record.frame_width
-    size, ndof = system.size, system.ndof
-    normal_rows, shear_rows = np.zeros((n, size)), np.zeros((n * k, size))
-    for c in range(n):
-        a, b = step.record.block_a[c], step.record.block_b[c]
-        normal_rows[c, a * ndof:(a + 1) * ndof] += springs.normal_a[c]
-        normal_rows[c, b * ndof:(b + 1) * ndof] -= springs.normal_b[c]
-        for j in range(k):
-            shear_rows[c * k + j, a * ndof:(a + 1) * ndof] += springs.shear_a[c, j]
-            shear_rows[c * k + j, b * ndof:(b + 1) * ndof] -= springs.shear_b[c, j]
-    c_p = ctx.coeffs.c_p
-    kn, ks = step.response.normal_stiffness, step.response.shear_stiffness
-    tension, tau = step.response.tension, step.yield_force()
-    x = cp.Variable(size)
-    z = cp.Variable(n, nonneg=True)
-    plastic = cp.Variable((n, k))
-    gap = step.record.gap + c_p * normal_rows @ x
-    shear = cp.reshape(step.shear0.ravel() + c_p * shear_rows @ x, (n, k), order="C")
-    springs_energy = (cp.sum(cp.multiply(kn / 2, cp.square(gap - z))) + tension @ z
-                      + cp.sum(cp.multiply(ks / 2, cp.sum(cp.square(shear - plastic), axis=1)))
-                      + tau @ cp.norm(plastic, 2, axis=1))
-    objective = 0.5 * cp.quad_form(x, cp.psd_wrap(0.5 * (a_matrix + a_matrix.T))) - f @ x + springs_energy / c_p
-    held = np.repeat(arrays.block_fixed, ndof)  # the fixed base does not move
-    problem = cp.Problem(cp.Minimize(objective), [x[np.flatnonzero(held)] == 0])
-    problem.solve(solver=cp.CLARABEL, tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10)
-    assert problem.status == "optimal", problem.status
-
-    def potential(xv):
-        """Π at increments xv (the fixed base's taken as they must be, zero: the conic solver leaves 1e-12 m
-        there), its springs' z and p at their optimum (the Moreau envelopes, closed form)."""
-        xv = np.where(held, 0.0, xv)
-        g = step.record.gap + c_p * normal_rows @ xv
-        sv = (step.shear0.ravel() + c_p * shear_rows @ xv).reshape(n, k)
-        beyond = np.maximum(g - tension / kn, 0.0)
-        size = np.linalg.norm(sv, axis=1)
-        slip = np.maximum(size - tau / ks, 0.0)
-        springs_v = np.sum(kn / 2 * (g - beyond) ** 2 + tension * beyond + ks / 2 * (size - slip) ** 2 + tau * slip)
-        return 0.5 * xv @ a_matrix @ xv - f @ xv + springs_v / c_p
-
-    free = np.flatnonzero(~held)
-    potential.convexity = float(np.linalg.eigvalsh(a_matrix[np.ix_(free, free)]).min())  # A's: Π is at least
-    return captured["dd"].ravel(), x.value, potential
+    system = stepper.assemble(ctx, [t for t in terms if t is not contact])
+    problem = step_problem(step, system, ctx.coeffs.c_p, step.yield_force(), arrays.block_fixed)
+    reference, _ = problem.solve_conic(tolerance=1e-10)
+    return captured["dd"].ravel(), reference, problem
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -157,11 +110,12 @@ def _newton_and_reference(dim, seed, n_blocks):
 def test_newton_equals_a_conic_solver_on_the_step_problem(dim, seed, n_blocks):
     got = _newton_and_reference(dim, seed, n_blocks)
     assert got is not None  # every block starts within 2e-4 m of the base, well inside d0: contacts, a step
-    newton, reference, potential = got
+    newton, reference, problem = got
+    potential = problem.potential
     # the Newton solution is the minimum: its Π is no higher than the conic solver's (taken back to the fixed
-    # base), to rounding
+    # base, where the conic solver leaves 1e-12 m), to rounding
     assert potential(newton) <= potential(reference) + 1e-12 * abs(potential(reference))
     # and the two agree: Π is strongly convex (its convexity at least A's smallest eigenvalue λ, the inertia), so a
     # point within ΔΠ of the minimum lies within sqrt(2ΔΠ/λ) of it; the conic solver's ΔΠ is at most 1e-9 of Π
-    bound = np.sqrt(2.0 * 1e-9 * abs(potential(reference)) / potential.convexity)
+    bound = np.sqrt(2.0 * 1e-9 * abs(potential(reference)) / problem.convexity)
     assert np.linalg.norm(newton - reference) <= bound, (np.linalg.norm(newton - reference), bound)

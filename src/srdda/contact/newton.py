@@ -63,6 +63,7 @@ __all__ = ["NewtonContactModel", "NewtonContactStep", "NewtonContactTerm", "ARMI
 UNBOUNDED = 1e300  # the yield force of a contact whose normal force no solve has given yet (it sticks)
 ARMIJO = 1e-4  # a step must decrease Π by this fraction of what its slope at the start promises (Armijo)
 MIN_STEP = 1e-6  # the backtracking stops at this step length
+ROUNDING = 64 * np.finfo(float).eps  # relative rounding of Π's sums over contacts: decreases below it are noise
 
 
 def _units(vectors: np.ndarray) -> np.ndarray:
@@ -200,8 +201,11 @@ class NewtonContactStep(ContactStep):
         c = curvature()
         slope0 = -c + float(np.dot(true_n - lin_n, dn) + np.sum((true_s - lin_s) * ds))
         alpha = 1.0
-        if slope0 < 0.0:  # a descent direction (not so, at most, the first solve's predicted states: taken whole)
-            base = self._potentials(gap0, shear0, False) - self._potentials(gap0, shear0, True)
+        true0, model0 = self._potentials(gap0, shear0, False), self._potentials(gap0, shear0, True)
+        # below the rounding of Π's contact parts no line search can tell values apart: the full step is taken
+        resolvable = -slope0 > ROUNDING * (abs(true0) + abs(model0)) / c_p
+        if slope0 < 0.0 and resolvable:  # a descent direction (not so, at most, the first solve's predicted states)
+            base = true0 - model0
 
             def rise(alpha: float) -> float:  # Π(α) − Π(0)
                 gap, shear = along(alpha)
