@@ -123,8 +123,10 @@ def push_row(buf: np.ndarray, n: int, row: tuple) -> np.ndarray:
 def both_ways(pairs: np.ndarray) -> np.ndarray:
     """The candidate pairs (k, 2) each both ways round, (a, b) then (b, a): the order the narrow phases test
     them in (a's vertices against b, then b's against a)."""
-    out = np.empty((2 * pairs.shape[0], 2), dtype=pairs.dtype)
-    for k in range(pairs.shape[0]):
-        out[2 * k, 0], out[2 * k, 1] = pairs[k, 0], pairs[k, 1]
-        out[2 * k + 1, 0], out[2 * k + 1, 1] = pairs[k, 1], pairs[k, 0]
+    n = pairs.shape[0]
+    out = np.empty((n + n, pairs.shape[1]), dtype=pairs.dtype)
+    for k in range(n):
+        forward, backward = out[k + k], out[k + k + 1]
+        forward[0], forward[1] = pairs[k, 0], pairs[k, 1]
+        backward[0], backward[1] = pairs[k, 1], pairs[k, 0]
     return out
