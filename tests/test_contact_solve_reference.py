@@ -29,7 +29,7 @@ def test_newton_equals_a_conic_solver_on_the_step_problem(dim, seed, n_blocks):
     weight = DENSITY * BLOCK_HEIGHT * GRAVITY
     got = held_tresca_step(arrays, reference_run(1e-9), lambda n: rng.uniform(0.0, weight, n))
     assert got is not None  # every block starts within 2e-4 m of the base, well inside d0: contacts, a step
-    problem = got.problem
+    problem = got.problem()
     reference, _ = problem.solve_conic(tolerance=1e-10)
     newton, potential = got.increments, problem.potential
     # the Newton solution is the minimum: its Π is no higher than the conic solver's (taken back to the fixed

@@ -17,13 +17,14 @@ from typing import Any
 
 import numpy as np
 
+from ..assembly.system import BlockSystem
 from ..contact.conic import StepProblem, step_problem
 from ..contact.newton import NewtonContactModel, NewtonContactStep, NewtonContactTerm
 from ..contact.pipeline import ContactParameters
 from ..model import JointMaterial, Material, Model, ModelArrays
 from ..settings import RunSettings
 from ..solvers import get_solver
-from ..state import initial_state
+from ..state import State, initial_state
 from ..step import Stepper, contact_parameters, default_terms, model_half_height
 
 __all__ = ["HeldTrescaStep", "held_tresca_step", "blocks_on_base", "compare", "GRAVITY"]
@@ -55,23 +56,30 @@ class HeldTrescaStep:
     """One step's Tresca problem and its Newton solution."""
 
     increments: np.ndarray  # (size,) the Newton iteration's block increments
-    problem: StepProblem
+    step: NewtonContactStep  # the step's contacts (their springs' rows, gaps, yield forces)
+    others: BlockSystem  # the system of every other term
+    c_p: float  # the scheme's penalty weight
+    fixed: np.ndarray  # (nb,) the fixed blocks
     solves: int  # the Newton iteration's linear solves
     seconds: float  # wall time of the step (assembly, solves, line searches), detection excluded
 
+    def problem(self) -> StepProblem:
+        """The problem written out (dense: small models)."""
+        return step_problem(self.step, self.others, self.c_p, self.step.yield_force(), self.fixed)
 
-def held_tresca_step(arrays: ModelArrays, run: RunSettings,
-                     normal_star: Callable[[int], np.ndarray]) -> HeldTrescaStep | None:
-    """The first step of ``arrays`` under ``run`` (``contact_solver = "newton"``, a dense solver), N* of the
-    yield forces ``normal_star(n)``; None where no contact is near or the step was not accepted."""
+
+def held_tresca_step(arrays: ModelArrays, run: RunSettings, normal_star: Callable[[int], np.ndarray],
+                     state: State | None = None, solver: str = "dense") -> HeldTrescaStep | None:
+    """The step of ``arrays`` from ``state`` (default: the start) under ``run`` (``contact_solver = "newton"``),
+    N* of the yield forces ``normal_star(n)``; None where no contact is near or the step was not accepted."""
     terms = default_terms(arrays, run)
     contact = next((t for t in terms if isinstance(t, NewtonContactTerm)), None)
     if contact is None:
         return None
     contact.model = _HeldTresca(arrays, contact_parameters(arrays, run, model_half_height(arrays.vertices)),
                                 normal_star)
-    stepper = Stepper(arrays, run, get_solver("dense"), terms)
-    state = initial_state(arrays, stepper.method)
+    stepper = Stepper(arrays, run, get_solver(solver), terms)
+    state = initial_state(arrays, stepper.method) if state is None else state
     last: dict[str, Any] = {}
     converged = contact.converged
 
@@ -95,9 +103,9 @@ def held_tresca_step(arrays: ModelArrays, run: RunSettings,
     if step is None or outcome.status != "accepted":
         return None
     ctx = last["ctx"]
-    system = stepper.assemble(ctx, [t for t in terms if t is not contact])
-    problem = step_problem(step, system, ctx.coeffs.c_p, step.yield_force(), arrays.block_fixed)
-    return HeldTrescaStep(last["dd"].ravel(), problem, outcome.solves, seconds)
+    others = stepper.assemble(ctx, [t for t in terms if t is not contact])
+    return HeldTrescaStep(last["dd"].ravel(), step, others, ctx.coeffs.c_p, arrays.block_fixed, outcome.solves,
+                          seconds)
 
 
 def blocks_on_base(dim: int, rng: np.random.Generator, n_blocks: int, spacing: float = 1.2) -> Model:
@@ -153,12 +161,13 @@ def compare(dims: tuple[int, ...] = (2, 3), sizes: tuple[int, ...] = (1, 5, 20),
                                        lambda n: rng.uniform(0.0, weight, n))
                 if got is None:
                     continue
+                problem = got.problem()
                 start = time.perf_counter()
-                reference, program = got.problem.solve_conic(tolerance=1e-10)
+                reference, program = problem.solve_conic(tolerance=1e-10)
                 total = time.perf_counter() - start
                 stats = program.solver_stats
-                pi_newton, pi_conic = got.problem.potential(got.increments), got.problem.potential(reference)
-                rows.append({"dim": dim, "blocks": n_blocks, "seed": seed, "contacts": len(got.problem.gap),
+                pi_newton, pi_conic = problem.potential(got.increments), problem.potential(reference)
+                rows.append({"dim": dim, "blocks": n_blocks, "seed": seed, "contacts": len(problem.gap),
                              "unknowns": len(got.increments), "newton_solves": got.solves,
                              "newton_s": got.seconds, "conic_iterations": int(stats.num_iters),
                              "conic_solve_s": float(stats.solve_time), "conic_total_s": total,
