@@ -22,6 +22,7 @@ from srdda.geometry.jointsets3d import plane_normal
 from srdda.model import Model
 from srdda.settings import RunSettings
 from srdda.step import Stepper, contact_parameters, model_half_height
+from srdda.term import CUT_CAUSES
 
 # Block counts of the three slopes: every closed loop of the joint lines (Shi's DC), as the DDAML
 # converter cuts the benchmark files slope_{a,b,c}.geo (measured once, docs/performance.md).
@@ -98,6 +99,7 @@ def test_bench_quick_json_rows() -> None:
         assert (r["dim"], r["method"], r["dt"], r["steps"]) == (2, "dda0", 0.002, 2)
         # every attempt is either accepted or rejected
         assert r["attempts"] == r["steps"] + r["rejected_steps"]
+        assert sum(r[f"cuts_{c}"] for c in CUT_CAUSES) == r["rejected_steps"]  # every cut has one cause
         assert r["solves_total"] >= r["steps"] * r["solves_per_step"]
         assert 0.0 < r["sim_time"] <= 2 * 0.002 + 1e-15  # Δt is at most the set one
         shares = [r[f"share_{p}"] for p in ("detection", "assembly", "solve", "open_close", "other")]
@@ -250,6 +252,7 @@ def test_tiny_3d_wall_runs_through_the_runner() -> None:
     assert set(REQUIRED_KEYS) <= set(row) and row["status"] == "completed", row["note"]
     assert (row["dim"], row["blocks"], row["steps"], row["dt"]) == (3, 1 + 6 + 7, 2, 1e-3)
     assert row["attempts"] == row["steps"] + row["rejected_steps"]
+    assert sum(row[f"cuts_{c}"] for c in CUT_CAUSES) == row["rejected_steps"]  # every cut has one cause
     assert row["contacts_per_attempt"] > 0  # the 3D detection was counted
     # the 3D contact classes are timed: detection and open-close took some time
     assert row["share_detection"] > 0.0 and row["share_open_close"] > 0.0

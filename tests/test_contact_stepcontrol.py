@@ -4,6 +4,10 @@ import pytest
 
 import srdda
 from srdda.contact import ContactSet
+from srdda.solvers import get_solver
+from srdda.state import initial_state
+from srdda.step import Stepper
+from srdda.term import CUT_CAUSES
 
 G = 10.0
 
@@ -62,6 +66,32 @@ def test_open_close_cap_cuts_and_then_stops_with_a_message():
     assert res.final_state.step == 0  # nothing accepted, nothing recorded but the start
     ok = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=10))
     assert ok.completed
+
+
+def _first_attempt(model, settings):
+    arrays = model.arrays()
+    stepper = Stepper(arrays, settings, get_solver())
+    return stepper.step(initial_state(arrays, stepper.method), settings.dt)
+
+
+def _sliding_block():
+    m = srdda.Model(gravity=(0.0, -G))
+    m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
+    m.add_block([[-2, -1], [2, -1], [2, 0], [-2, 0]], "rock", fixed=True)
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock", velocity=(1.0, 0.0))
+    return m
+
+
+def test_a_cut_says_its_cause():
+    # the cause tells a solve that gave up (the open-close cap) from Δt too long for the contacts'
+    # displacement bound: the bench counts cuts by it (srdda.term.CUT_CAUSES)
+    capped = _first_attempt(_sliding_block(), srdda.RunSettings(dt=1e-3, n_steps=1, open_close_max_iterations=1))
+    assert (capped.status, capped.cause) == ("cut", "iteration"), capped.reason
+    far = _first_attempt(_falling_block_over_far_ground(), srdda.RunSettings(dt=0.01, n_steps=1, max_displacement_ratio=2e-6))
+    assert (far.status, far.cause) == ("cut", "displacement"), far.reason
+    ok = _first_attempt(_sliding_block(), srdda.RunSettings(dt=1e-3, n_steps=1))
+    assert (ok.status, ok.cause) == ("accepted", "")
+    assert {capped.cause, far.cause} < set(CUT_CAUSES)
 
 
 def test_contacts_are_committed_on_the_state():

@@ -47,6 +47,7 @@ class StepOutcome:
     dt_next: float  # the Δt to use next: grown back after an accepted step, reduced after a cut
     state: State | None = None
     reason: str = ""
+    cause: str = ""  # of a cut: one of srdda.term.CUT_CAUSES
 
 
 def model_half_height(vertices: np.ndarray) -> float:
@@ -197,7 +198,7 @@ class Stepper:
                 changes += 1
                 if changes >= min(t.max_iterations for t in cutting):
                     return StepOutcome("cut", solves, dt * s.step_cut_factor,
-                                       reason=f"{label}: {cutting[0].pending()} in {solves} solves")
+                                       reason=f"{label}: {cutting[0].pending()} in {solves} solves", cause="iteration")
             elif all(solves - changes >= t.max_iterations for t in pending):
                 break
         new = self._update(ctx, dd, multipliers)
@@ -208,7 +209,7 @@ class Stepper:
             verdict = term.review(ctx, new)
             if isinstance(verdict, StepCut):
                 return StepOutcome("cut", solves, dt * max(s.step_cut_factor, verdict.factor),
-                                   reason=f"step {new.step}: {verdict.reason}")
+                                   reason=f"step {new.step}: {verdict.reason}", cause=verdict.cause)
             if verdict is not None:
                 bounds.append(verdict)
         dt_next = min(bounds) if bounds else dt

@@ -40,7 +40,7 @@ if TYPE_CHECKING:
     from .model import ModelArrays
     from .state import State
 
-__all__ = ["StepContext", "Term", "StepCut", "ENERGY_KINDS", "LEDGER"]
+__all__ = ["StepContext", "Term", "StepCut", "CUT_CAUSES", "ENERGY_KINDS", "LEDGER"]
 
 
 @dataclass
@@ -73,10 +73,16 @@ class StepContext:
 
 @dataclass(frozen=True)
 class StepCut:
-    """A term's request to repeat the step with Δt × ``factor``, and why."""
+    """A term's request to repeat the step with Δt × ``factor``, and why (``cause``: one of CUT_CAUSES)."""
 
     reason: str
     factor: float
+    cause: str
+
+
+# Why a step is cut: a term's iteration did not settle within its solves, a vertex moved further than the
+# contacts allow (g2·w0), a contact penetrated deeper than allowed. Only the first says the solve gave up.
+CUT_CAUSES = ("iteration", "displacement", "penetration")
 
 
 class Term:

@@ -18,7 +18,9 @@ nothing is patched in the parent):
   holds); ``solves_total`` also counts the solves of rejected attempts;
 * ``rejected_steps``: step attempts whose outcome was a cut (open-close cap,
   displacement or penetration check), counted by a wrapper around
-  ``Stepper.step``;
+  ``Stepper.step``; ``cuts_iteration``, ``cuts_displacement`` and
+  ``cuts_penetration`` split them by cause (:data:`srdda.term.CUT_CAUSES`:
+  only the first says that the contact solve gave up);
 * ``cg_iterations``: conjugate-gradient iterations of the whole run, what the
   run's iterative solver records per solve (0 when every solve was direct);
   ``cg_iterations_per_solve`` divides by the solves it made. With
@@ -57,6 +59,7 @@ from ..model import Model
 from ..settings import RunSettings
 from ..step import Stepper
 from ..solvers import DEFAULT_TOLERANCE
+from ..term import CUT_CAUSES
 from .models import brick_wall, english_bond_wall, jointed_slope, jointed_slope_3d
 
 __all__ = ["BenchCase", "CASES", "QUICK", "REQUIRED_KEYS", "run_cases", "format_table"]
@@ -102,6 +105,7 @@ class Probe:
         self._stack: list[list[float]] = []  # [start, time of nested timed calls]
         self.attempts = 0
         self.rejected = 0
+        self.cuts = dict.fromkeys(CUT_CAUSES, 0)
         self.accepted_solves: list[int] = []
         self.accepted_dt: list[float] = []
         self.sim_time = 0.0
@@ -151,6 +155,7 @@ class Probe:
                 outcome = step(stepper, state, dt)
                 if outcome.status == "cut":
                     self.rejected += 1
+                    self.cuts[outcome.cause] += 1
                 elif outcome.status == "accepted":
                     self.accepted_solves.append(outcome.solves)
                     self.accepted_dt.append(outcome.state.time - state.time)
@@ -275,7 +280,7 @@ def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout:
         "contact_solver": settings.contact_solver, "steps": n,
         "dt": settings.dt, "sim_time": probe.sim_time, "steps_per_s": n / wall if wall > 0 else 0.0,
         "solves_per_step": float(np.mean(probe.accepted_solves)) if n else None,
-        "rejected_steps": probe.rejected,
+        "rejected_steps": probe.rejected, **{f"cuts_{cause}": n for cause, n in probe.cuts.items()},
         "peak_mb": peak_memory_mb(),
         "steps_requested": steps, "attempts": probe.attempts, "solves_total": probe.solves,
         "mean_accepted_dt": float(np.mean(probe.accepted_dt)) if n else None,
@@ -337,7 +342,7 @@ def format_table(rows: list[dict[str, Any]]) -> str:
     on_gpu = any(r.get("device", "cpu") != "cpu" for r in rows)
     gpu_header = ("device", "GPU MB") if on_gpu else ()
     header = ("model", "blocks", "method", "contacts", "steps", "dt", "sim time", "steps/s", "solves/step",
-              "CG it/solve", "rejected", "detect%", "assembly%", "solve%", "open-close%", "other%", "peak MB",
+              "CG it/solve", "cuts it/disp/pen", "detect%", "assembly%", "solve%", "open-close%", "other%", "peak MB",
               *gpu_header, "note")
     lines = [header]
     for r in rows:
@@ -348,7 +353,7 @@ def format_table(rows: list[dict[str, Any]]) -> str:
                       f"{r['steps']}/{r.get('steps_requested', '-')}",
                       _num(r["dt"], "g"), _num(r["sim_time"], ".4g"), _num(r["steps_per_s"], ".3g"),
                       _num(r["solves_per_step"], ".1f"), _num(r.get("cg_iterations_per_solve"), ".0f"),
-                      _num(r["rejected_steps"], "d"), *shares,
+                      "/".join(_num(r.get(f"cuts_{c}"), "d") for c in CUT_CAUSES), *shares,
                       _num(r["peak_mb"], ".0f"), *gpu, r.get("note", "")))
     widths = [max(len(str(line[i])) for line in lines) for i in range(len(header))]
     return "\n".join("  ".join(str(c).ljust(w) for c, w in zip(line, widths)).rstrip() for line in lines)

@@ -526,11 +526,11 @@ class ContactTerm(Term):
         moved = float(np.max(np.hypot.reduce(new.vertices[touching] - ctx.state.vertices[touching], axis=1)))
         if moved > self.max_displacement:
             return StepCut(f"a vertex moved {moved:.3g} m > g2·w0 = {self.max_displacement:.3g} m",
-                           min(0.9, 0.9 * self.max_displacement / moved))
+                           min(0.9, 0.9 * self.max_displacement / moved), "displacement")
         step = self.step
         if step is not None and step.max_penetration > step.params.max_penetration:
             return StepCut(f"penetration {step.max_penetration:.3g} m > {step.params.max_penetration:.3g} m "
-                           "(raise the contact penalty)", 0.0)
+                           "(raise the contact penalty)", 0.0, "penetration")
         # grow Δt back towards the set value, at most ×1.5, aiming at 90% of g2·w0 for the next step
         growth = 1.5 if moved == 0 else min(1.5, 0.9 * self.max_displacement / moved)
         return min(self.dt_max, ctx.dt * growth)
