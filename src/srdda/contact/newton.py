@@ -30,12 +30,16 @@ Newton's method with a line search on Π reaches it:
   of where a spring takes hold: the next model has the springs that act at
   the full step already;
 * N* of the yield forces stays fixed while the active set settles (each
-  such problem is convex), then follows the solved normal forces; a contact
-  new in the step sticks until a solve gave it a normal force (Shi: a
-  contact that closes locks first);
-* it has converged when the full step was taken, no contact changed state
-  by more than the negligible force, and no sliding contact's normal force
-  (nor a sticking one's strength) moved by more than ``friction_tolerance``.
+  such problem is convex), then follows the solved normal forces once
+  (``NORMAL_UPDATES``: each update restarts the active set's settling; more
+  updates cost more solves than they change, docs/dev/contact-solve.md);
+  a contact new in the step sticks until a solve gave it a normal force
+  (Shi: a contact that closes locks first);
+* it has converged when the full step was taken, every contact's yield
+  force came from a normal force, no contact changed state by more than the
+  negligible force, and, until N* was updated ``NORMAL_UPDATES`` times, no
+  sliding contact's normal force (nor a sticking one's strength) moved by
+  more than ``friction_tolerance``.
 
 A bonded contact carries tension up to its tensile strength and, sliding, its
 cohesion, both perfectly plastic within the step (so the problem stays
@@ -60,9 +64,11 @@ if TYPE_CHECKING:
 
 __all__ = ["NewtonContactModel", "NewtonContactStep", "NewtonContactTerm", "ARMIJO", "MIN_STEP"]
 
-UNBOUNDED = 1e300  # the yield force of a contact whose normal force no solve has given yet (it sticks)
+UNBOUNDED = 1e100  # N: the yield force of a contact whose normal force no solve has given yet (it sticks; τ² finite)
 ARMIJO = 1e-4  # a step must decrease Π by this fraction of what its slope at the start promises (Armijo)
 MIN_STEP = 1e-6  # the backtracking stops at this step length
+FORCE_FLOOR = 1e-9  # the iteration's force tolerance (× the blocks' force scale) when the run's is below: rounding
+NORMAL_UPDATES = 1  # the Tresca fixed point's updates of N* after the first problem settled; then N* is held
 ROUNDING = 64 * np.finfo(float).eps  # relative rounding of Π's sums over contacts: decreases below it are noise
 
 
@@ -93,6 +99,7 @@ class NewtonContactStep(ContactStep):
         self.step_lengths: list[float] = []  # α of every solve's line search
         self._stiffer: tuple[np.ndarray, np.ndarray] | None = None  # springs acting at a damped solve's full step
         self.follow_normal_force = True  # False: N* stays as given (the Tresca problem alone: tests)
+        self.normal_updates = 0  # N* updates of the Tresca fixed point so far (NORMAL_UPDATES at most)
         self._c_p = 1.0  # the scheme's penalty weight (set by add_to)
 
     # -- the contact model ---------------------------------------------------
@@ -236,7 +243,7 @@ class NewtonContactStep(ContactStep):
         kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
         compression = np.maximum(-kn * gap, 0.0)
         self._force_limit = negligible_force(ctx.arrays.block_mass, ctx.arrays.gravity, r.block_a, r.block_b,
-                                             compression, p.force_tolerance)
+                                             compression, max(p.force_tolerance, FORCE_FLOOR))
         # a bonded contact carries tension up to its tensile strength (beyond, that force), a sliding one the
         # cohesion: both perfectly plastic within the step, so that the step's problem stays convex; the bond
         # then breaks when the step is committed (ContactLaw.keeps_bond)
@@ -261,13 +268,17 @@ class NewtonContactStep(ContactStep):
         off = np.abs(compression - self.normal_star) > np.maximum(p.friction_tolerance * compression,
                                                                   self._force_limit)
         would_slip = trial > self.response.strength(compression) + self._force_limit
-        unsettled_friction = acts & ((slip & off) | (stick & would_slip)) & self.follow_normal_force
-        done = settled_states and not np.any(unsettled_friction)
+        unsettled_friction = acts & ((slip & off) | (stick & would_slip)) & self.follow_normal_force \
+            & (self.normal_updates < NORMAL_UPDATES)
+        # a contact new in the step stuck at an unbounded yield force in this solve (frictionless ones too):
+        # the step is done only after a solve with every yield force from a normal force
+        done = settled_states and not np.any(unsettled_friction) and bool(np.all(self.known))
         changed = changed_normal | changed_shear | (unsettled_friction if settled_states else False)
         self.unsettled_pairs = np.column_stack([r.block_a[changed], r.block_b[changed]])
         self.normal_on, self.stick, self.slip = normal_on, stick, slip
         self.slip_direction = np.where(slip[:, None], _units(shear), 0.0)
-        if self.follow_normal_force and (settled_states or not np.all(self.known)):
+        if self.follow_normal_force and not done and (settled_states or not np.all(self.known)):
+            self.normal_updates += bool(settled_states)
             self.normal_star = compression
         self.known[:] = True
         self.normal_force = -np.minimum(kn * gap, self.response.tension)
