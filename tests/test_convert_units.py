@@ -98,6 +98,18 @@ def test_convert_states_the_conversion_in_the_header(tmp_path):
     assert model.materials["material 1"].density == pytest.approx(5 * SLUG / FT**3, rel=1e-12)
 
 
+def test_an_existing_output_is_kept_unless_overwrite(tmp_path):
+    out = tmp_path / "mine.toml"
+    out.write_text("# my edits\n")
+    args = ["convert", str(DATA / "block_ft.geo"), "-o", str(out)]
+    refused = CliRunner().invoke(main, args)
+    assert refused.exit_code == 2 and "already exists" in refused.output and "--overwrite" in refused.output
+    assert out.read_text() == "# my edits\n"
+    replaced = CliRunner().invoke(main, [*args, "--overwrite"])
+    assert replaced.exit_code == 0, replaced.output
+    assert load_model(out)[0].materials["material 1"].density == pytest.approx(5 * SLUG / FT**3, rel=1e-12)
+
+
 def test_units_option_overrides_the_detection(tmp_path):
     out = tmp_path / "as_si.toml"
     result = CliRunner().invoke(main, ["convert", str(DATA / "block_ft.geo"), "--units", "SI", "-o", str(out)])

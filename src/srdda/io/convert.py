@@ -73,8 +73,9 @@ def header_comment(data: DDAInput) -> str:
                    "(9.81 SI, 32.2 ft-lbf-slug, 386 in-lbf).")
 @click.option("--example", type=click.Choice(list(shipped_inputs())), default=None,
               help="Convert an input shipped with srdda instead of FILES (a slope in Shi's legacy format, ft units).")
-def convert(files: tuple[str, ...], output: str, domain_types: tuple[int, ...], units: str, example: str | None
-            ) -> None:
+@click.option("--overwrite", is_flag=True, help="Replace OUTPUT if it exists (else that is an error).")
+def convert(files: tuple[str, ...], output: str, domain_types: tuple[int, ...], units: str, example: str | None,
+            overwrite: bool) -> None:
     """Convert DDA input files (GEOMETRY [ANALYSIS], legacy text or DDAML) to an srdda model file (SI).
 
     Without ANALYSIS, GEOMETRY's .ana is used, or documented defaults when there is none.
@@ -87,6 +88,8 @@ def convert(files: tuple[str, ...], output: str, domain_types: tuple[int, ...], 
         raise click.UsageError("give a geometry file (and optionally its analysis file), or --example NAME")
     if len(files) > 2:
         raise click.UsageError("give a geometry file and optionally its analysis file")
+    if Path(output).exists() and not overwrite:  # a model file may hold a user's edits: never replaced unasked
+        raise click.UsageError(f"{output} already exists; pass --overwrite to replace it, or choose another -o")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
