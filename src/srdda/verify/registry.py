@@ -123,6 +123,7 @@ EXPECTED_SECONDS: dict[str, tuple[float, float]] = {
     "extruded-incline-3d": (42.1, 42.1),
     "slide-topple-3d": (33.6, 33.6),
     "wedge-3d": (43.2, 43.2),
+    "wedge-rest-3d": (19.4, 19.4),
 }
 
 
