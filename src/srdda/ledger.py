@@ -22,9 +22,15 @@ work the contact penalty springs and the springs (fixed points, point springs,
 springs) did on the blocks with their step force -k(g + c_p·Δg), minus the
 change of their stored energy: ½k|Δg|² per step with c_p = 1 (DDA's impact
 loss at contacts), plus what state changes or a point update other than T·Δd
-(dda1) put in or took out (:meth:`srdda.constraints.springs.SpringTerm.work`).
+(dda1) put in or took out (:meth:`srdda.constraints.springs.SpringTerm.work`);
+the contacts' change of stored energy counts from what the step's springs hold
+at the gaps detected at t (:meth:`srdda.contact.pipeline.ContactStep.start_energy`).
+Neither ``dissipated_contact`` nor ``dissipated_friction`` ever falls over a
+step (:class:`EnergyWatch` warns when one does).
 D_numerical is what is left: the time scheme's and the linearisation's own
-dissipation or drift, so ``balance`` = E - W_loads - W_prescribed -
+dissipation or drift (among it the change from the contact energy a step
+committed, at gaps moved by the linearised increments, to that at the next
+step's detected gaps), so ``balance`` = E - W_loads - W_prescribed -
 W_constraints + D_dashpots + D_friction + D_contact + D_springs stays at E(0)
 when it is zero.
 
