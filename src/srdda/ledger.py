@@ -22,9 +22,15 @@ work the contact penalty springs and the springs (fixed points, point springs,
 springs) did on the blocks with their step force -k(g + c_p·Δg), minus the
 change of their stored energy: ½k|Δg|² per step with c_p = 1 (DDA's impact
 loss at contacts), plus what state changes or a point update other than T·Δd
-(dda1) put in or took out (:meth:`srdda.constraints.springs.SpringTerm.work`).
+(dda1) put in or took out (:meth:`srdda.constraints.springs.SpringTerm.work`);
+the contacts' change of stored energy counts from what the step's springs hold
+at the gaps detected at t (:meth:`srdda.contact.pipeline.ContactStep.start_energy`).
+Neither ``dissipated_contact`` nor ``dissipated_friction`` ever falls over a
+step (:class:`EnergyWatch` warns when one does).
 D_numerical is what is left: the time scheme's and the linearisation's own
-dissipation or drift, so ``balance`` = E - W_loads - W_prescribed -
+dissipation or drift (among it the change from the contact energy a step
+committed, at gaps moved by the linearised increments, to that at the next
+step's detected gaps), so ``balance`` = E - W_loads - W_prescribed -
 W_constraints + D_dashpots + D_friction + D_contact + D_springs stays at E(0)
 when it is zero.
 
@@ -47,7 +53,8 @@ if TYPE_CHECKING:
     from .state import State
     from .term import Term
 
-__all__ = ["ENERGY_NAMES", "energies", "EnergyWatch", "CREATION_TOLERANCE"]
+__all__ = ["ENERGY_NAMES", "energies", "EnergyWatch", "CREATION_TOLERANCE", "DISSIPATION_ROUNDING",
+           "CONTACT_LOSSES"]
 
 
 def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[str, float]:
@@ -68,30 +75,57 @@ def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[s
 # far above the methods' own drift (srdda and dda1 ~1e-14, dda0 3e-4 of a rockfall's energy),
 # far below a contact that creates energy (1.5x to 4x measured before issue 15).
 CREATION_TOLERANCE = 0.01
+# What contacts take out never decreases over a step (docs/reliability.md): a fall of more than this fraction of
+# the energy in play is energy a contact put in. The contact sums round at about 1e-13 of it (a gap is a
+# difference of coordinates 1e4 times larger; measured 2e-13 on two blocks' impact), a contact that creates
+# energy gives 1e-2 and more (½k_n g² of one impact: 0.5 of it under Chung-Hulbert before issue 29).
+DISSIPATION_ROUNDING = 1e-9
+CONTACT_LOSSES = ("dissipated_contact", "dissipated_friction")  # the ledger's entries that never decrease
 NAMED_BLOCKS = 3  # blocks a warning names
 
 
 class EnergyWatch:
-    """Spots energy created in a run: the ledger's balance rising above its start.
+    """Spots energy created in a run: the ledger's balance rising above its start, or what the contacts took
+    out (:data:`CONTACT_LOSSES`) falling over a step.
 
     The scale is the largest energy in play so far: kinetic, elastic, spring and
     contact energy, the change of gravitational energy and the work done on the
-    model. :meth:`check` gives the warning once, naming the step and the blocks
-    whose kinetic energy rose most in it.
+    model. :meth:`check` gives each warning once: the balance's naming the step
+    and the blocks whose kinetic energy rose most in it, the fall's naming the
+    step and the ledger entry.
     """
 
     def __init__(self, start: Mapping[str, float], tolerance: float = CREATION_TOLERANCE) -> None:
         self.start = dict(start)
+        self.last = {k: start[k] for k in CONTACT_LOSSES}  # the contacts' losses after the last step
         self.tolerance = tolerance
         self.scale = 0.0
         self.warned = False
+        self.warned_fall = False
 
-    def check(self, energy: Mapping[str, float], arrays: ModelArrays, before: State, after: State) -> str | None:
-        """The warning for the step from ``before`` to ``after`` (energies ``energy`` at ``after``), or None."""
+    def check(self, energy: Mapping[str, float], arrays: ModelArrays, before: State, after: State) -> list[str]:
+        """The warnings for the step from ``before`` to ``after`` (energies ``energy`` at ``after``)."""
         in_play = energy["kinetic"] + energy["elastic"] + energy["spring"] + energy["contact"] \
             + abs(energy["gravity"] - self.start["gravity"]) \
             + sum(abs(energy[k] - self.start[k]) for k in LEDGER)
         self.scale = max(self.scale, in_play)
+        out = [w for w in (self._fall(energy, after), self._created(energy, arrays, before, after)) if w is not None]
+        self.last = {k: energy[k] for k in CONTACT_LOSSES}
+        return out
+
+    def _fall(self, energy: Mapping[str, float], after: State) -> str | None:
+        """The warning for a contact loss that fell over the step by more than the rounding, or None."""
+        fall = {k: self.last[k] - energy[k] for k in CONTACT_LOSSES}
+        name = max(fall, key=lambda k: fall[k])
+        if self.warned_fall or fall[name] <= DISSIPATION_ROUNDING * self.scale:
+            return None
+        self.warned_fall = True
+        return (f"energy created by contacts: at step {after.step} (t = {after.time:.6g} s) the ledger's {name} "
+                f"fell by {fall[name]:.3g} J, {fall[name] / self.scale:.3g} of the energy in play (contacts only "
+                "take energy out; docs/reliability.md)")
+
+    def _created(self, energy: Mapping[str, float], arrays: ModelArrays, before: State, after: State) -> str | None:
+        """The warning for the balance risen above its start by more than the tolerance, or None."""
         created = energy["balance"] - self.start["balance"]
         if self.warned or self.scale <= 0.0 or created <= self.tolerance * self.scale:
             return None

@@ -130,8 +130,7 @@ def _steps(stepper: Stepper, settings: RunSettings, state: State,
             if overflow is not None:
                 status, state = f"diverged: step {state.step}: {overflow}", before
                 break
-            created = watch.check(energy, arrays, before, state) if watch is not None else None
-            if created is not None:
+            for created in watch.check(energy, arrays, before, state) if watch is not None else ():
                 warnings.warn(created, EnergyWarning, stacklevel=2)
             if recorded:
                 record(state, outcome.solves, energy)

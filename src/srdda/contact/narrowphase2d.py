@@ -18,8 +18,11 @@ the signed distance n·(v - p0) is positive outside.
   pass the angle criterion, with the largest signed distance to v: the line
   v entered b through, or would enter through (the shortest way out of b).
   Of the two ways to pair (v, q) -- v on an edge of q or q on an edge of v --
-  exactly one contact is kept: the one from the lower block index when both
-  pass the angle criterion, else the one that passes.
+  exactly one contact is kept: q's vertex-edge contact where q has one with
+  an edge at v that faces the entrance line (strained blocks whose corners
+  met), else the
+  one from the lower block index when both pass the angle criterion, else the
+  one that passes. A projection within ``CORNER`` of an edge's end is at the end.
 
 * **Plausibility**: a vertex behind the edge's line (negative gap) counts
   only if it lies inside the other block, no deeper than the allowed
@@ -43,6 +46,12 @@ __all__ = ["VERTEX_EDGE", "VERTEX_VERTEX", "FOUND_VERTEX", "FOUND_EDGE", "FOUND_
 VERTEX_EDGE = 0
 VERTEX_VERTEX = 1
 
+
+# a vertex projecting within this fraction of an edge's length of its end is at the end (vertex-vertex): the
+# rounding of coordinates at coinciding corners (stacked or cut blocks, 1e-17 of 1 m measured), not a position
+# along the edge; without it such a corner was paired both ways, vertex-edge and vertex-vertex, one solve the
+# one, the next the other, and each contact found already compressed brought ½k_n g² from nothing
+CORNER = 1e-9
 
 # columns of a detected-contact row [vertex, edge start, kind]
 FOUND_VERTEX, FOUND_EDGE, FOUND_KIND = range(3)
@@ -92,7 +101,7 @@ def _entrance_edge(X, nxt, prv, v, q, sin_tol):
     """
     for e in (prv[q], q):
         t = _projection(X, nxt, v, e)
-        if 0.0 < t < 1.0:
+        if CORNER < t < 1.0 - CORNER:
             x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
             if _wedge_fits(X, nxt, prv, v, dy / length, -dx / length, sin_tol):
                 return -1
@@ -180,6 +189,39 @@ def _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
 
 
 @njit(cache=True)
+def _vertex_edge(X, block_ptr, nxt, prv, b, v, e, d0, sin_tol, max_depth):
+    """Whether vertex v and edge e of block b make a vertex-edge contact: v projects into the interior of e,
+    within d0 of its line, passes the angle criterion and is plausible."""
+    x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
+    x = X[v, 0]
+    y = X[v, 1]
+    t = ((x - x0) * dx + (y - y0) * dy) / (length * length)
+    if t <= CORNER or t >= 1.0 - CORNER:
+        return False
+    nx = dy / length
+    ny = -dx / length
+    dist = nx * (x - x0) + ny * (y - y0)
+    return abs(dist) < d0 and _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol) \
+        and _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol)
+
+
+@njit(cache=True)
+def _duplicate(X, block_ptr, nxt, prv, a, v, q, chosen, d0, sin_tol, max_depth):
+    """Whether q has a vertex-edge contact with an edge at v (of block a) facing the entrance line ``chosen``
+    (normals opposite within the angle tolerance): the same contact as the vertex-vertex one of (v, q), which
+    would add a second spring to the corner pair, found already compressed where strained blocks' corners
+    met (½k_n g² from nothing, issue 29)."""
+    cx0, cy0, cdx, cdy, clength = _edge_frame(X, nxt, chosen)
+    for f in (prv[v], v):
+        x0, y0, dx, dy, length = _edge_frame(X, nxt, f)
+        facing = (cdy * dy + cdx * dx) / (clength * length) < 0.0 \
+            and abs(cdy * dx - cdx * dy) / (clength * length) <= sin_tol
+        if facing and _vertex_edge(X, block_ptr, nxt, prv, a, q, f, d0, sin_tol, max_depth):
+            return True
+    return False
+
+
+@njit(cache=True)
 def narrow_phase_2d(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_tol, max_depth):
     """Contacts (k, 3) [vertex, edge start, kind] of the candidate ``pairs`` (k, 2).
 
@@ -197,21 +239,14 @@ def narrow_phase_2d(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_
                 continue
             d02 = d0 * d0
             for e in range(block_ptr[b], block_ptr[b + 1]):
-                x0, y0, dx, dy, length = _edge_frame(X, nxt, e)
-                if (x - x0) ** 2 + (y - y0) ** 2 < d02:  # vertex-vertex with q = e
+                if (x - X[e, 0]) ** 2 + (y - X[e, 1]) ** 2 < d02:  # vertex-vertex with q = e
                     chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
-                    if chosen >= 0 and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
+                    if chosen >= 0 and not _duplicate(X, block_ptr, nxt, prv, a, v, e, chosen, d0, sin_tol, max_depth) \
+                            and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
                             and _plausible(X, block_ptr, nxt, prv, b, v, chosen, max_depth, sin_tol):
                         buf = push_row(buf, n, (v, chosen, VERTEX_VERTEX))
                         n += 1
-                t = ((x - x0) * dx + (y - y0) * dy) / (length * length)
-                if t <= 0.0 or t >= 1.0:
-                    continue
-                nx = dy / length
-                ny = -dx / length
-                dist = nx * (x - x0) + ny * (y - y0)
-                if abs(dist) < d0 and _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol) \
-                        and _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
+                if _vertex_edge(X, block_ptr, nxt, prv, b, v, e, d0, sin_tol, max_depth):
                     buf = push_row(buf, n, (v, e, VERTEX_EDGE))
                     n += 1
     return buf[:n].copy()

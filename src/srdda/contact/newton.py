@@ -6,10 +6,12 @@ loads, springs, constraints) with contacts is the minimum of the step's
 incremental potential (docs/contacts.md, *The contact solve*)
 
     Π(Δd) = ½ Δdᵀ A Δd − Fᵀ Δd + Σ_c [ ψ_n(g_c)/c_p + ψ_s(s_c)/c_p ],
-    g_c = g_0 + c_p n·(T_a Δd_a − T_b Δd_b),   s_c = s_e0 + c_p E·(T_a(r_a) Δd_a − T_b(r_b) Δd_b),
+    g_c = g_0' + c_p n·(T_a Δd_a − T_b Δd_b),   s_c = s_e0 + c_p E·(T_a(r_a) Δd_a − T_b(r_b) Δd_b),
 
-c_p the scheme's penalty weight, over the feasible set of the constraint
-rows. ψ_n(g) = ½k_n·g² while the contact is compressed (or bonded, up to its
+c_p the scheme's penalty weight, g_0' the start gap of the step force (the
+gap at t, c_p·g_0 where the contact was open at t:
+:meth:`~srdda.contact.pipeline.ContactStep.start_gap`), over the feasible set
+of the constraint rows. ψ_n(g) = ½k_n·g² while the contact is compressed (or bonded, up to its
 tensile strength T: beyond, T·g), else 0;
 ψ_s is an elastic-perfectly plastic shear spring with the yield force τ =
 tan φ·N* + c·A (Tresca: N* the normal force of the last iterate, updated
@@ -48,6 +50,7 @@ a contact that did not end the step locked loses it).
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -85,6 +88,9 @@ class NewtonContactStep(ContactStep):
                  response: JointResponse, law: ContactLaw, state: np.ndarray, direction: np.ndarray,
                  reference: np.ndarray, bonded: np.ndarray, normal_force: np.ndarray, known: np.ndarray) -> None:
         """``known``: the contacts whose normal force the last step gave (the others stick until a solve has)."""
+        # a bond's tension holds a contact closed at t, not one open at t: the convex tension cap would pull
+        # such a contact with T across its whole gap (a stack built with gaps: 4e-4 of its energy in play)
+        response = replace(response, tension=np.where(state == OPEN, 0.0, response.tension))
         super().__init__(record, kind, params, response, law, state, direction, reference, bonded, normal_force)
         # the linear model of the next solve: normal springs, sticking shear springs, slipping yield forces
         self.normal_on = state != OPEN
@@ -194,7 +200,7 @@ class NewtonContactStep(ContactStep):
     def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
         """α in (0, 1] along Δd_k + α·δ that decreases Π enough (Armijo, backtracking); ``curvature()`` gives
         δᵀHδ. The full step is tried first: near the solution it is taken (Newton's fast convergence)."""
-        gap_k, shear_k = self.record.gap, self.shear0
+        gap_k, shear_k = self.start_gap(self._c_p), self.shear0
         dn0, ds0 = self._increments(dd_before)
         dn, ds = self._increments(delta)
         c_p = self._c_p
@@ -234,12 +240,17 @@ class NewtonContactStep(ContactStep):
         self.step_lengths.append(alpha)
         return alpha
 
+    def _at_alpha_point(self, c_p: float) -> tuple[np.ndarray, np.ndarray]:
+        """The effective gaps g₀' + c_p·Δg (n,) and shears s₀ + c_p·Δs (n, k) of the last solve: where the
+        step's spring forces act (module doc)."""
+        return (self.start_gap(c_p) + c_p * (self.gap - self.record.gap),
+                self.shear0 + c_p * (self.shear - self.shear0))
+
     def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         self._moved(dd)
         r, p = self.record, self.params
         c_p = ctx.coeffs.c_p
-        gap = r.gap + c_p * (self.gap - r.gap)
-        shear = self.shear0 + c_p * (self.shear - self.shear0)
+        gap, shear = self._at_alpha_point(c_p)
         kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
         compression = np.maximum(-kn * gap, 0.0)
         self._force_limit = negligible_force(ctx.arrays.block_mass, ctx.arrays.gravity, r.block_a, r.block_b,
@@ -298,9 +309,7 @@ class NewtonContactStep(ContactStep):
         """The contacts as they ended the accepted step: the shear springs' references moved by their plastic
         slip, so that each spring carries its elastic stretch into the next step."""
         r = self.record
-        c_p = self._c_p
-        shear = self.shear0 + c_p * (self.shear - self.shear0)
-        elastic = self.elastic_shear(shear)
+        elastic, shear = self._carried_shear()
         reference = self.reference + r.reference_shift(elastic - shear)
         energy = self.stored_energy()
         ks = self.response.shear_stiffness
@@ -309,32 +318,52 @@ class NewtonContactStep(ContactStep):
                           np.where((self.state != OPEN)[:, None], -ks[:, None] * elastic, 0.0), self.gap.copy(),
                           elastic, r.joint, r.point_a, r.point_b, r.normal, energy)
 
+    def _carried_shear(self) -> tuple[np.ndarray, np.ndarray]:
+        """(s_e, s) (n, k): the stretch s = s₀ + Δs the shear springs end the step with (the α-point's at
+        c_p = 1), and the elastic part s_e of it they carry into the next step (s returned to the yield force).
+        Not the α-point's elastic stretch plus the rest of the step, (1 − c_p)·Δs: a slipping spring would carry
+        a stretch beyond its yield force and the energy of it."""
+        _, shear = self._at_alpha_point(1.0)
+        return self.elastic_shear(shear), shear
+
     def _held_in_band(self) -> np.ndarray:
         """No band here: a contact is closed exactly where it is compressed or bonded."""
         return np.zeros(len(self.state), dtype=bool)
 
     def stored_energy(self) -> float:
-        """J (per m in 2D) the springs keep: ½k_n g² of the closed contacts, ½k_s|s_e|² of every closed contact's
-        shear spring (a slipping one holds its stretch at the yield force)."""
-        r = self.record
-        c_p = getattr(self, "_c_p", 1.0)
-        gap = r.gap + c_p * (self.gap - r.gap)
-        elastic = self.elastic_shear(self.shear0 + c_p * (self.shear - self.shear0))
+        """J (per m in 2D) the closed contacts' springs keep at the end of the step (t + Δt, not the α-point):
+        ½k_n g² at the end gap (½T²/k_n where a bonded one ends pulled beyond its tensile strength T), and
+        ½k_s|s_e|² of the elastic stretch the shear spring carries into the next step (:meth:`_carried_shear`).
+        With c_p = 1 both are the α-point's."""
+        carried, _ = self._carried_shear()
         closed = self.state != OPEN
-        kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
-        return 0.5 * float(np.sum((kn * gap**2)[closed])) + 0.5 * float(np.sum((ks[:, None] * elastic**2)[closed]))
+        kn, ks, tension = self.response.normal_stiffness, self.response.shear_stiffness, self.response.tension
+        normal = np.where(kn * self.gap < tension, 0.5 * kn * self.gap**2, 0.5 * tension**2 / kn)
+        return float(np.sum(normal[closed])) + 0.5 * float(np.sum((ks[:, None] * carried**2)[closed]))
+
+    def start_energy(self) -> float:
+        """J (per m in 2D) the springs of the contacts closed at t hold at the step's detected gaps and the
+        stretches they carried in (as :meth:`stored_energy` at the end)."""
+        closed = ~self.open_at_start
+        kn, ks, tension = self.response.normal_stiffness, self.response.shear_stiffness, self.response.tension
+        gap = self.record.gap
+        normal = np.where(kn * gap < tension, 0.5 * kn * gap**2, 0.5 * tension**2 / kn)
+        return float(np.sum(normal[closed])) + 0.5 * float(np.sum((ks[:, None] * self.shear0**2)[closed]))
 
     def work(self, dd: np.ndarray, c_p: float) -> tuple[float, float]:
         """(friction, springs): minus the plastic dissipation τ·|slip| of the step, and the work of every
-        contact force (normal springs, shear springs at their yield force) over the step's increments."""
-        r = self.record
+        contact force (normal springs, shear springs at their yield force, at the α-point) over the step's
+        increments. The slip is the plastic part of the stretch the step ends with (what :meth:`commit` moves
+        the spring's reference by), not the α-point's over c_p: that one is off by (|s₀| − τ/k_s)(1/c_p − 1)
+        and would book friction that the springs' loss then gave back."""
         dn, ds = self._increments(dd)
-        gap = r.gap + c_p * dn
+        gap = self.start_gap(c_p) + c_p * dn
         shear = self.shear0 + c_p * ds
         normal, shear_force = self._forces(gap, shear, model=False)
         springs = -float(np.dot(normal, dn)) - float(np.sum(shear_force * ds))
-        plastic = magnitudes(shear - self.elastic_shear(shear))
-        friction = -float(np.sum(self.yield_force() * plastic)) / c_p
+        end = self.shear0 + ds
+        plastic = magnitudes(end - self.elastic_shear(end))
+        friction = -float(np.sum(self.yield_force() * plastic))
         return friction, springs - friction
 
 

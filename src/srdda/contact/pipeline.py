@@ -145,6 +145,8 @@ class ContactStep:
         self.shear0 = np.einsum("nki,ni->nk", record.frame, self.shear_points[0] - self.shear_points[1])
         self.gap = record.gap.copy()
         self.shear = self.shear0.copy()
+        self.open_at_start = state == OPEN  # no spring force at t (start_gap)
+        self.locked_at_start = state == LOCKED
         self.iterations = 0
         self.closed_this_step = np.zeros(len(state), dtype=bool)
         self.flips = np.zeros(len(state), dtype=np.int64)  # state changes of each contact in this step
@@ -188,9 +190,26 @@ class ContactStep:
             # the springs' unit rows n·T and e·T of every contact, whatever its state in the solves
             self._springs = ContactSprings(r.block_a, r.block_b, directional_rows(r.normal, ta),
                                            directional_rows(r.normal, tb), directional_rows(r.frame, tra),
-                                           directional_rows(r.frame, trb), r.gap, self.shear0,
-                                           self.response.normal_stiffness, self.response.shear_stiffness)
+                                           directional_rows(r.frame, trb), self.start_gap(ctx.coeffs.c_p),
+                                           self.shear0, self.response.normal_stiffness,
+                                           self.response.shear_stiffness)
         return self._springs
+
+    def start_gap(self, c_p: float) -> np.ndarray:
+        """g₀' (n,) of the normal springs' step force -k_n(g₀' + c_p·Δg) = -k_n((1 − c_p)·g_t + c_p·g).
+
+        The force at the scheme's α-point weighs the spring's force at t,
+        -k_n·g_t, by 1 − c_p (α_f of Chung-Hulbert; 0 for Shi and the paper's
+        scheme: then g₀' = g₀). That force is what the contact carried at t:
+        none if it was open, at most its tensile strength T if closed, so g_t
+        is g₀ capped at 0, or at T/k_n. With g_t = g₀ > 0 the spring would
+        pull the blocks across the gap for the part of the step before they
+        touch: ½k_n·g₀² from nothing per impact (docs/contacts.md, *Energy
+        from the α-point force of an impact*).
+        """
+        gap, response = self.record.gap, self.response
+        cap = np.where(self.open_at_start, 0.0, response.tension / response.normal_stiffness)
+        return np.where(gap > cap, c_p * gap + (1.0 - c_p) * cap, gap)
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         r = self.record
@@ -369,6 +388,14 @@ class ContactStep:
         return 0.5 * float(np.sum(response.normal_stiffness[closed] * self.gap[closed] ** 2)) \
             + 0.5 * float(np.sum(response.shear_stiffness[locked, None] * self.shear[locked] ** 2))
 
+    def start_energy(self) -> float:
+        """J (per m in 2D) the springs hold at t at the step's detected gaps and stretches: ½k_n g₀² of the
+        contacts closed at t, ½k_s|s₀|² of those locked (what :meth:`work`'s springs did work from)."""
+        closed, locked = ~self.open_at_start, self.locked_at_start
+        response = self.response
+        return 0.5 * float(np.sum(response.normal_stiffness[closed] * self.record.gap[closed] ** 2)) \
+            + 0.5 * float(np.sum(response.shear_stiffness[locked, None] * self.shear0[locked] ** 2))
+
     def work(self, dd: np.ndarray, c_p: float) -> tuple[float, float]:
         """Work (J, per m in 2D) over the increments ``dd`` of the last solve's friction forces and springs.
 
@@ -391,7 +418,7 @@ class ContactStep:
         closed, locked = self._solved_state != OPEN, self._solved_state == LOCKED
         dg, ds = self.gap - r.gap, self.shear - self.shear0
         kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
-        springs = -float(np.sum((kn * (r.gap + c_p * dg) * dg)[closed])) \
+        springs = -float(np.sum((kn * (self.start_gap(c_p) + c_p * dg) * dg)[closed])) \
             - float(np.sum((ks[:, None] * (self.shear0 + c_p * ds) * ds)[locked]))
         return friction, springs
 
@@ -545,15 +572,21 @@ class ContactTerm(Term):
         """What the contacts took out over the step: by friction, and by their penalty springs.
 
         ``dissipated_contact`` is the springs' negative work minus the change of
-        their stored energy (from the contacts at t to those of this step).
+        their stored energy, from what this step's springs held at t
+        (:meth:`ContactStep.start_energy`) to the end. Not from the energy the
+        last step committed: its gaps moved by the linearised increments, this
+        step's are detected at the exact vertices, and the difference (second
+        order in the step: a vertex sliding along an edge that turns) is the
+        linearisation's, left in the balance with D_numerical (srdda.ledger),
+        as is the energy of a contact found already penetrating.
         """
-        if self.step is None and ctx.state.contacts is None:
+        if self.step is None:
             return None
-        friction, springs = (0.0, 0.0) if self.step is None else self.step.work(dd, ctx.coeffs.c_p)
-        stored = 0.0 if self.step is None else self.step.stored_energy()
+        friction, springs = self.step.work(dd, ctx.coeffs.c_p)
+        stored = self.step.stored_energy() - self.step.start_energy()
         out = np.zeros(len(LEDGER))
         out[LEDGER.index("dissipated_friction")] = -friction
-        out[LEDGER.index("dissipated_contact")] = -springs - (stored - self.energy(ctx.arrays, ctx.state))
+        out[LEDGER.index("dissipated_contact")] = -springs - stored
         return out
 
 
