@@ -72,6 +72,7 @@ ARMIJO = 1e-4  # a step must decrease Π by this fraction of what its slope at t
 MIN_STEP = 1e-6  # the backtracking stops at this step length
 FORCE_FLOOR = 1e-9  # the iteration's force tolerance (× the blocks' force scale) when the run's is below: rounding
 NORMAL_UPDATES = 1  # the Tresca fixed point's updates of N* after the first problem settled; then N* is held
+KINK_PASS = 1e-6  # a damped step goes this fraction past the first kink of Π along the Newton direction
 ROUNDING = 64 * np.finfo(float).eps  # relative rounding of Π's sums over contacts: decreases below it are noise
 
 
@@ -231,6 +232,14 @@ class NewtonContactStep(ContactStep):
                 guess = -slope0 * alpha**2 / (2.0 * (value - slope0 * alpha))
                 alpha = min(max(guess, 0.1 * alpha), 0.5 * alpha)
                 value = rise(alpha)
+            if alpha < 1.0:
+                # backtracking stops short of the first kink of Π along δ; past it a spring changes state, so
+                # the next model differs. Up to the kink Π is at most the model's quadratic, which decreases to
+                # α = 1: step just past the kink where Π allows (else the iterates approach it and never cross)
+                kink = self._first_kink(gap0, shear0, c_p * dn, c_p * ds)
+                beyond = min(1.0, kink * (1.0 + KINK_PASS))
+                if alpha < beyond < 1.0 and rise(beyond) <= ARMIJO * beyond * slope0:
+                    alpha = beyond
         if alpha < 1.0:
             # a damped step stops short of where a spring takes hold: the next model has the springs that act
             # at the full step already (a contact closed, a shear spring sticking), or it would stop short again
@@ -239,6 +248,24 @@ class NewtonContactStep(ContactStep):
                              self.response.shear_stiffness * magnitudes(shear1) <= self.yield_force())
         self.step_lengths.append(alpha)
         return alpha
+
+    def _first_kink(self, gap: np.ndarray, shear: np.ndarray, dgap: np.ndarray, dshear: np.ndarray) -> float:
+        """The smallest α in (0, 1] at which a spring's true state changes along gap + α·dgap, shear + α·dshear
+        (a normal spring reaches its tensile strength or zero force, a shear spring its yield force); 1 if none."""
+        kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
+        ways = [np.divide(self.response.tension / kn - gap, dgap, out=np.full(len(gap), np.inf),
+                          where=dgap != 0.0)]
+        # |s + α·ds| = τ/k_s: a·α² + b·α + c = 0
+        limit = self.yield_force() / ks
+        a = np.einsum("nk,nk->n", dshear, dshear)
+        b = 2.0 * np.einsum("nk,nk->n", shear, dshear)
+        c = np.einsum("nk,nk->n", shear, shear) - limit**2
+        root = np.sqrt(np.maximum(b * b - 4.0 * a * c, 0.0))
+        for sign in (-1.0, 1.0):
+            ways.append(np.divide(-b + sign * root, 2.0 * a, out=np.full(len(a), np.inf), where=a > 0.0))
+        alphas = np.concatenate(ways)
+        ahead = alphas[(alphas > KINK_PASS) & (alphas <= 1.0)]
+        return float(ahead.min()) if len(ahead) else 1.0
 
     def _at_alpha_point(self, c_p: float) -> tuple[np.ndarray, np.ndarray]:
         """The effective gaps g₀' + c_p·Δg (n,) and shears s₀ + c_p·Δs (n, k) of the last solve: where the
