@@ -17,7 +17,7 @@ import numpy as np
 from .geometry.polygon import BlockMoments
 from .geometry.polyhedron import PolyhedronMoments
 from .integrators.methods import Method
-from .energy_names import LEDGER
+from .energy_names import CUT_CAUSES, LEDGER
 from .model import ModelArrays
 
 __all__ = ["State", "initial_state", "mass_density"]
@@ -40,6 +40,8 @@ class State:
     ledger: np.ndarray = field(default_factory=lambda: np.zeros(len(LEDGER)))  # cumulative work, see LEDGER
     carried: Mapping[str, Any] = field(default_factory=dict)  # by term name: what the step carries over
     dt_next: float | None = None  # the step-size control's Δt for the next step (None: the run's dt)
+    # step attempts cut so far, by cause (CUT_CAUSES order): checkpointed, so a resumed run keeps counting
+    cuts: np.ndarray = field(default_factory=lambda: np.zeros(len(CUT_CAUSES), dtype=np.int64))
 
     @property
     def contacts(self) -> Any:
