@@ -37,7 +37,8 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-__all__ = ["history", "quantity_names", "components", "block_values", "method_label", "plot_blocks", "fig_configuration",
+__all__ = ["history", "quantity_names", "components", "block_values", "method_label", "plot_blocks",
+           "fig_configuration",
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
            "fig_trajectories", "fig_time_series", "plot_bolts", "fig_bolt_forces",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index",

@@ -67,8 +67,8 @@ def run_summary(res: Results, final: State) -> dict[str, Any]:
 def format_summary(summary: dict[str, Any]) -> list[str]:
     """The summary as a few lines of text for the end of ``srdda run``."""
     cuts = ", ".join(f"{n} {cause}" for cause, n in summary["cuts"].items())
-    lines = [f"steps: {summary['last_step']} ({summary['recorded_steps']} recorded), to t = {summary['last_time']:.6g} s;"
-             f" step attempts cut: {summary['cut_attempts']} ({cuts})"]
+    lines = [f"steps: {summary['last_step']} ({summary['recorded_steps']} recorded), to t = "
+             f"{summary['last_time']:.6g} s; step attempts cut: {summary['cut_attempts']} ({cuts})"]
     for key, words, unit in (("largest_displacement", "largest displacement", "m"),
                              ("largest_speed", "largest speed", "m/s")):
         x = summary[key]
