@@ -133,8 +133,7 @@ class Result:
     def cuts(self) -> dict[str, int]:
         """Step attempts cut in the run, by cause (:data:`srdda.term.CUT_CAUSES`), counted from its first step
         (``State.cuts``: a run continued from a state or a checkpoint goes on counting)."""
-        cuts = self.final_state.cuts if self.final_state is not None else np.zeros(len(CUT_CAUSES), dtype=np.int64)
-        return dict(zip(CUT_CAUSES, map(int, cuts)))
+        return self.final_state.cuts_by_cause if self.final_state is not None else dict.fromkeys(CUT_CAUSES, 0)
 
     def record(self, arrays: ModelArrays, state: State, solves: int, energy: Mapping[str, float]) -> None:
         """Append one step's histories (replacing the latest one when the history is not kept)."""

@@ -48,6 +48,11 @@ class State:
         """The contacts as the step that led here ended them (the contact term's carried state), or None."""
         return self.carried.get("contacts")
 
+    @property
+    def cuts_by_cause(self) -> dict[str, int]:
+        """``cuts`` by the name of their cause: ``{"iteration": 0, "displacement": 2, "penetration": 0}``."""
+        return dict(zip(CUT_CAUSES, map(int, self.cuts)))
+
     def carrying(self, name: str, value: Any) -> State:
         """This state with ``value`` carried under the term name ``name``."""
         return replace(self, carried={**self.carried, name: value})

@@ -16,7 +16,6 @@ from typing import Any
 import numpy as np
 
 from .contact.openclose import LOCKED, OPEN, SLIDING
-from .energy_names import CUT_CAUSES
 from .kinematics.blocktype import block_type_of_dimension
 from .ledger import energy_in_play
 from .state import State
@@ -56,7 +55,7 @@ def run_summary(res: Results, final: State) -> dict[str, Any]:
         return {"value": float(values[row, block]), "block": str(res.block_names[block]),
                 "time": float(time[row]), "step": int(step[row])}
 
-    return {"cuts": dict(zip(CUT_CAUSES, map(int, final.cuts))), "cut_attempts": int(np.sum(final.cuts)),
+    return {"cuts": final.cuts_by_cause, "cut_attempts": int(np.sum(final.cuts)),
             "largest_displacement": largest(displacement), "largest_speed": largest(speed),
             "final_kinetic_energy": float(energy["kinetic"][-1]), "energy_unit": "J/m" if block_type.dim == 2 else "J",
             "energy_balance": {"error": error, "scale": scale, "relative_error": error / scale if scale > 0 else None},
