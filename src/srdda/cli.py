@@ -102,11 +102,11 @@ def save_histories(results_file: Path, result: Result, out: Path) -> tuple[Path,
     arrays = {name: stored.array(name) for name in HISTORIES}
     np.savez_compressed(out / "histories.npz", **arrays, energy_keys=np.array(stored.energy_names))
     steps = arrays["step"]
-    summary = {"method": result.method, "status": result.status, "blocks": list(result.block_names),
-               "recorded_steps": len(steps), "last_step": int(steps[-1]) if len(steps) else None,
-               "last_time": float(arrays["time"][-1]) if len(steps) else None}
+    summary = {"method": result.method, "status": result.status, "blocks": list(result.block_names)}
     if len(steps) and result.final_state is not None:
         summary.update(run_summary(stored, result.final_state))
+    else:
+        summary.update(recorded_steps=0, last_step=None, last_time=None)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     return out / "histories.npz", summary
 

@@ -29,7 +29,7 @@ def run_summary(res: Results, final: State) -> dict[str, Any]:
     """The summary of a run: recorded histories ``res`` and the state the run ended in, ``final``.
 
     Keys (SI units; energies in J per metre of thickness in 2D, J in 3D):
-    ``cuts`` (step attempts cut, by cause) and ``cut_attempts`` (their sum);
+    ``recorded_steps``, ``last_step`` and ``last_time``; ``cuts`` (step attempts cut, by cause) and ``cut_attempts`` (their sum);
     ``largest_displacement`` and ``largest_speed`` of a block's centroid over
     the recorded steps (``value`` in m or m/s, ``block``, ``time``, ``step``);
     ``final_kinetic_energy`` (in ``energy_unit``); ``energy_balance`` (``error``: the ledger's
@@ -55,7 +55,8 @@ def run_summary(res: Results, final: State) -> dict[str, Any]:
         return {"value": float(values[row, block]), "block": str(res.block_names[block]),
                 "time": float(time[row]), "step": int(step[row])}
 
-    return {"cuts": final.cuts_by_cause, "cut_attempts": int(np.sum(final.cuts)),
+    return {"recorded_steps": len(step), "last_step": int(step[-1]), "last_time": float(time[-1]),
+            "cuts": final.cuts_by_cause, "cut_attempts": int(np.sum(final.cuts)),
             "largest_displacement": largest(displacement), "largest_speed": largest(speed),
             "final_kinetic_energy": float(energy["kinetic"][-1]), "energy_unit": "J/m" if block_type.dim == 2 else "J",
             "energy_balance": {"error": error, "scale": scale, "relative_error": error / scale if scale > 0 else None},
