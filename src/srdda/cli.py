@@ -23,7 +23,8 @@ from tqdm import tqdm
 from . import __version__
 from .backends.arrays import DEVICES, GpuUnavailable, cupy_backend, gpu_problem
 from .integrators.methods import METHODS
-from .cli_results import animate_command, plot_command, prepare_resume_run, report_paper, vtk_command
+from .cli_results import (animate_command, history_command, plot_command, prepare_resume_run, report_paper,
+                          vtk_command)
 from .io.convert import convert
 from .io.modelfile import ModelFileError, format_validation, load_model, read_model_text
 from .io.results_store import OutputExistsError, ResultsStore, ResultsWriteError, read_results
@@ -34,6 +35,7 @@ from .settings import RunSettings
 from .simulation import run
 from .solvers import available_solvers, get_solver
 from .step import Stepper
+from .summary import format_summary, run_summary
 
 __all__ = ["main", "BadInput"]
 
@@ -87,23 +89,26 @@ HISTORIES = ("step", "time", "centroid", "area", "rotation", "velocity", "stress
              "measured_velocity", "energy", "iterations")
 
 
-def save_histories(results_file: Path, result: Result, out: Path) -> tuple[Path, int]:
+def save_histories(results_file: Path, result: Result, out: Path) -> tuple[Path, dict]:
     """Write a run's block histories as ``histories.npz`` and a ``summary.json`` in ``out``.
 
     They are read from the results file the run streamed to (every recorded
-    step, not the vertices), so the run itself keeps no history in memory.
-    Returns the file written and the number of recorded steps.
+    step, not the vertices), so the run itself keeps no history in memory;
+    the summary adds :func:`srdda.summary.run_summary` of them and the final
+    state. Returns the file written and the summary.
     """
     out.mkdir(parents=True, exist_ok=True)
     stored = read_results(results_file, names=HISTORIES)
     arrays = {name: stored.array(name) for name in HISTORIES}
     np.savez_compressed(out / "histories.npz", **arrays, energy_keys=np.array(stored.energy_names))
     steps = arrays["step"]
-    summary = {"method": result.method, "status": result.status, "blocks": list(result.block_names),
-               "recorded_steps": len(steps), "last_step": int(steps[-1]) if len(steps) else None,
-               "last_time": float(arrays["time"][-1]) if len(steps) else None}
+    summary = {"method": result.method, "status": result.status, "blocks": list(result.block_names)}
+    if len(steps) and result.final_state is not None:
+        summary.update(run_summary(stored, result.final_state))
+    else:
+        summary.update(recorded_steps=0, last_step=None, last_time=None)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    return out / "histories.npz", len(steps)
+    return out / "histories.npz", summary
 
 
 def new_output_folder(model: str) -> Path:
@@ -187,7 +192,7 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
     try:
         with tqdm(total=total, disable=True if quiet else None, unit="step", desc=desc) as bar:
             result = go(lambda _: bar.update(1))
-        path, recorded = save_histories(store_path, result, out_dir)
+        path, summary = save_histories(store_path, result, out_dir)
     except GpuUnavailable as exc:  # a GPU run resumed where there is none
         raise BadInput(f"{store_path}: {exc}") from None
     except ResultsWriteError as exc:
@@ -199,7 +204,9 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
         raise click.ClickException(str(exc)) from None
     except OSError as exc:
         raise click.ClickException(f"cannot write the histories in {out_dir} ({exc.strerror})") from None
-    click.echo(f"{result.status}: {recorded} recorded steps written to {store_path} and {path}")
+    click.echo(f"{result.status}: {summary['recorded_steps']} recorded steps written to {store_path} and {path}")
+    if "cuts" in summary:
+        click.echo("\n".join(format_summary(summary)))
     if not result.completed:
         sys.exit(3)
 
@@ -470,6 +477,7 @@ def ensemble_command(spec: str, runs: int | None, workers: int | None, scheduler
 main.add_command(plot_command)
 main.add_command(animate_command)
 main.add_command(vtk_command)
+main.add_command(history_command)
 
 main.add_command(convert)
 

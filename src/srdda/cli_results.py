@@ -1,6 +1,8 @@
-"""Command-line tools for results files: ``srdda plot``, ``srdda animate``, ``srdda vtk``, resuming a run."""
+"""Command-line tools for results files: ``srdda plot``, ``srdda animate``, ``srdda vtk``, ``srdda history``,
+resuming a run."""
 from __future__ import annotations
 
+import sys
 import warnings
 from pathlib import Path
 
@@ -10,7 +12,7 @@ from tqdm import tqdm
 from .io.results_store import (ResultsDamageWarning, ResultsFileError, ResultsInUseError, ResultsWriteError,
                                Resumption, StoredResult, prepare_resume, read_results)
 
-__all__ = ["plot_command", "animate_command", "vtk_command", "prepare_resume_run", "report_paper"]
+__all__ = ["plot_command", "animate_command", "vtk_command", "history_command", "prepare_resume_run", "report_paper"]
 
 RUN = click.Path(exists=True)
 
@@ -228,3 +230,46 @@ def vtk_command(run: str, out: str, every: int | None, quiet: bool) -> None:
         raise click.ClickException(f"cannot write in {out} ({exc.strerror})") from None
     for path in pvds.values():
         click.echo(f"wrote {path}")
+
+
+@click.command("history")
+@click.argument("run", type=RUN)
+@click.option("--block", "blocks", multiple=True, help="A block name or index (repeatable).")
+@click.option("--point", "points", type=click.IntRange(min=0), multiple=True,
+              help="A measured point: its index, in the order the model adds them from 0 (repeatable).")
+@click.option("--quantity", "quantities", multiple=True,
+              help="What to write (repeatable; default: all). Blocks: centroid, displacement (of the centroid "
+                   "from its start), rotation, velocity, stress, area; measured points: position, displacement, "
+                   "velocity; or one component, e.g. velocity.vx, stress.sxx, displacement.y.")
+@click.option("--csv", "csv_file", type=click.Path(dir_okay=False), default=None,
+              help="Write the CSV into this file (default: print it).")
+@click.option("--overwrite", is_flag=True, help="Replace the --csv file if it exists (else that is an error).")
+def history_command(run: str, blocks: tuple[str, ...], points: tuple[int, ...], quantities: tuple[str, ...],
+                    csv_file: str | None, overwrite: bool) -> None:
+    """Time histories of blocks and measured points of a results file RUN as CSV, one column per component."""
+    from .timehistories import history_table, write_history_csv
+
+    res = _read(run)
+    if not blocks and not points:
+        raise click.UsageError(f"give --block NAME or --point INDEX; the blocks are {', '.join(res.block_names)}")
+    n_points = res.array("measured_position").shape[1]
+    wrong = [p for p in points if p >= n_points]
+    if wrong:
+        raise click.UsageError(f"--point {wrong[0]}: no such measured point; the run has {n_points}"
+                               + (f" (0 to {n_points - 1})" if n_points else ""))
+    try:
+        header, table = history_table(res, _block_indices(res, blocks), points, quantities)
+    except ValueError as exc:
+        raise click.UsageError(f"--quantity: {exc}") from None
+    if csv_file is None:
+        write_history_csv(header, table, sys.stdout)
+        return
+    path = Path(csv_file)
+    if path.exists() and not overwrite:
+        raise click.UsageError(f"{path} already exists; pass --overwrite to replace it, or choose another --csv")
+    try:
+        with _writable(path).open("w", encoding="utf-8", newline="") as out:
+            write_history_csv(header, table, out)
+    except OSError as exc:
+        raise click.ClickException(f"cannot write {path} ({exc.strerror})") from None
+    click.echo(f"wrote {path}: {len(table)} recorded steps, {len(header)} columns", err=True)

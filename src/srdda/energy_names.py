@@ -1,11 +1,12 @@
-"""The names of the energies terms store and of the work the ledger books (:mod:`srdda.ledger`).
+"""The names of the energies terms store and of the work the ledger books (:mod:`srdda.ledger`), and of
+the causes of step cuts (``State.cuts`` counts them).
 
 A leaf module: the term interface, the state and the ledger all read these
 names, and it imports nothing of theirs.
 """
 from __future__ import annotations
 
-__all__ = ["ENERGY_KINDS", "LEDGER", "ENERGY_NAMES"]
+__all__ = ["ENERGY_KINDS", "LEDGER", "ENERGY_NAMES", "CUT_CAUSES"]
 
 # what a term's ``energy`` may report (srdda.term.Term.energy_kind)
 ENERGY_KINDS = ("kinetic", "gravity", "elastic", "spring", "contact")
@@ -14,3 +15,6 @@ LEDGER = ("work_loads", "work_prescribed", "work_constraints", "dissipated", "di
           "dissipated_contact", "dissipated_springs")
 # the energies of a run's records: the stored ones, their total, the ledger and the balance
 ENERGY_NAMES = (*ENERGY_KINDS, "total", *LEDGER, "balance")
+# Why a step is cut: a term's iteration did not settle within its solves, a vertex moved further than the
+# contacts allow (g2·w0), a contact penetrated deeper than allowed. Only the first says the solve gave up.
+CUT_CAUSES = ("iteration", "displacement", "penetration")

@@ -42,7 +42,7 @@ heights of the moving blocks.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -53,8 +53,8 @@ if TYPE_CHECKING:
     from .state import State
     from .term import Term
 
-__all__ = ["ENERGY_NAMES", "energies", "EnergyWatch", "CREATION_TOLERANCE", "DISSIPATION_ROUNDING",
-           "CONTACT_LOSSES"]
+__all__ = ["ENERGY_NAMES", "energies", "energy_in_play", "EnergyWatch", "CREATION_TOLERANCE",
+           "DISSIPATION_ROUNDING", "CONTACT_LOSSES"]
 
 
 def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[str, float]:
@@ -69,6 +69,17 @@ def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[s
         + out["dissipated"] + out["dissipated_friction"] + out["dissipated_contact"] \
         + out["dissipated_springs"]
     return out
+
+
+def energy_in_play(energy: Mapping[str, Any], start: Mapping[str, float]) -> Any:
+    """The energy in play, the scale a balance error is measured against (J per m in 2D, J in 3D).
+
+    Kinetic, elastic, spring and contact energy, the change of gravitational
+    energy since ``start`` and every work of the ledger done since then; the
+    entries of ``energy`` are numbers (one state) or arrays (recorded steps).
+    """
+    return energy["kinetic"] + energy["elastic"] + energy["spring"] + energy["contact"] \
+        + abs(energy["gravity"] - start["gravity"]) + sum(abs(energy[k] - start[k]) for k in LEDGER)
 
 
 # Energy created beyond this fraction of the energy in play is reported (docs/reliability.md):
@@ -105,10 +116,7 @@ class EnergyWatch:
 
     def check(self, energy: Mapping[str, float], arrays: ModelArrays, before: State, after: State) -> list[str]:
         """The warnings for the step from ``before`` to ``after`` (energies ``energy`` at ``after``)."""
-        in_play = energy["kinetic"] + energy["elastic"] + energy["spring"] + energy["contact"] \
-            + abs(energy["gravity"] - self.start["gravity"]) \
-            + sum(abs(energy[k] - self.start[k]) for k in LEDGER)
-        self.scale = max(self.scale, in_play)
+        self.scale = max(self.scale, energy_in_play(energy, self.start))
         out = [w for w in (self._fall(energy, after), self._created(energy, arrays, before, after)) if w is not None]
         self.last = {k: energy[k] for k in CONTACT_LOSSES}
         return out

@@ -37,7 +37,8 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-__all__ = ["history", "quantity_names", "block_values", "method_label", "plot_blocks", "fig_configuration",
+__all__ = ["history", "quantity_names", "components", "block_values", "method_label", "plot_blocks",
+           "fig_configuration",
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
            "fig_trajectories", "fig_time_series", "plot_bolts", "fig_bolt_forces",
            "fig_swing_trajectories", "fig_wave_shapes", "fig_nunchaku", "fig_rockfall", "step_index",
@@ -65,7 +66,7 @@ def _energy_names(res: Results) -> tuple[str, ...]:
     return tuple(res.energy[0]) if res.energy else ENERGY_NAMES
 
 
-def _components(res: Results) -> dict[str, tuple[str, ...]]:
+def components(res: Results) -> dict[str, tuple[str, ...]]:
     """The component names of the vector histories of ``res`` (2D or 3D)."""
     solid = _dim(res) == 3
     coords = XYZ if solid else XY
@@ -91,7 +92,7 @@ def history(res: Results, name: str) -> np.ndarray:
         if part not in names:
             raise KeyError(f"no energy {part!r}; energies are {names}")
         return np.asarray(res.array("energy"))[:, names.index(part)]
-    comps = _components(res).get(base)
+    comps = components(res).get(base)
     if comps is None or part not in comps:
         raise KeyError(f"unknown quantity {name!r}; try one of {quantity_names(res)}")
     return np.asarray(res.array(base))[..., comps.index(part)]
@@ -99,7 +100,7 @@ def history(res: Results, name: str) -> np.ndarray:
 
 def quantity_names(res: Results) -> list[str]:
     """Every name :func:`history` accepts for ``res``."""
-    comps = _components(res)
+    comps = components(res)
     return (["area", "rotation", "iterations", "bolt_force", "bolt_shear_force"]
             + [f"velocity.{c}" for c in comps["velocity"]]
             + [f"stress.{c}" for c in comps["stress"]] + [f"energy.{e}" for e in _energy_names(res)]

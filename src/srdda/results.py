@@ -16,6 +16,7 @@ from typing import Protocol
 import numpy as np
 
 from .constraints.bolts import bolt_forces, bolt_state
+from .energy_names import CUT_CAUSES
 from .model import ModelArrays
 from .state import State
 
@@ -127,6 +128,12 @@ class Result:
     @property
     def completed(self) -> bool:
         return self.status == "completed"
+
+    @property
+    def cuts(self) -> dict[str, int]:
+        """Step attempts cut in the run, by cause (:data:`srdda.term.CUT_CAUSES`), counted from its first step
+        (``State.cuts``: a run continued from a state or a checkpoint goes on counting)."""
+        return self.final_state.cuts_by_cause if self.final_state is not None else dict.fromkeys(CUT_CAUSES, 0)
 
     def record(self, arrays: ModelArrays, state: State, solves: int, energy: Mapping[str, float]) -> None:
         """Append one step's histories (replacing the latest one when the history is not kept)."""

@@ -24,7 +24,7 @@ from .settings import RunSettings
 from .solvers import blas_threads_for_steps, get_solver
 from .state import State, initial_state
 from .step import Stepper, default_terms, time_step_advice
-from .term import Term
+from .term import CUT_CAUSES, Term
 
 __all__ = ["run", "EnergyWarning", "TimeStepWarning"]
 
@@ -110,13 +110,14 @@ def _steps(stepper: Stepper, settings: RunSettings, state: State,
             break
         dt = outcome.dt_next
         if outcome.status == "cut":
+            state = replace(state, cuts=state.cuts + (np.array(CUT_CAUSES) == outcome.cause))
             if dt < min_dt:
                 status = (f"stopped: {outcome.reason}; the time step {dt:.3g} s fell below the minimum "
                           f"{min_dt:.3g} s")
                 break
             continue
         assert outcome.state is not None
-        before, state = state, replace(outcome.state, dt_next=dt)
+        before, state = state, replace(outcome.state, dt_next=dt, cuts=state.cuts)
         overflow = _non_finite(state, ("stress", "acceleration", "points", "rotation"))
         if overflow is not None:
             status, state = f"diverged: step {state.step}: {overflow}", before

@@ -17,7 +17,7 @@ import numpy as np
 from .geometry.polygon import BlockMoments
 from .geometry.polyhedron import PolyhedronMoments
 from .integrators.methods import Method
-from .energy_names import LEDGER
+from .energy_names import CUT_CAUSES, LEDGER
 from .model import ModelArrays
 
 __all__ = ["State", "initial_state", "mass_density"]
@@ -40,11 +40,18 @@ class State:
     ledger: np.ndarray = field(default_factory=lambda: np.zeros(len(LEDGER)))  # cumulative work, see LEDGER
     carried: Mapping[str, Any] = field(default_factory=dict)  # by term name: what the step carries over
     dt_next: float | None = None  # the step-size control's Δt for the next step (None: the run's dt)
+    # step attempts cut so far, by cause (CUT_CAUSES order): checkpointed, so a resumed run keeps counting
+    cuts: np.ndarray = field(default_factory=lambda: np.zeros(len(CUT_CAUSES), dtype=np.int64))
 
     @property
     def contacts(self) -> Any:
         """The contacts as the step that led here ended them (the contact term's carried state), or None."""
         return self.carried.get("contacts")
+
+    @property
+    def cuts_by_cause(self) -> dict[str, int]:
+        """``cuts`` by the name of their cause: ``{"iteration": 0, "displacement": 2, "penetration": 0}``."""
+        return dict(zip(CUT_CAUSES, map(int, self.cuts)))
 
     def carrying(self, name: str, value: Any) -> State:
         """This state with ``value`` carried under the term name ``name``."""

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .energy_names import ENERGY_KINDS, LEDGER
+from .energy_names import CUT_CAUSES, ENERGY_KINDS, LEDGER
 
 if TYPE_CHECKING:
     from .assembly.system import BlockSystem
@@ -78,11 +78,6 @@ class StepCut:
     reason: str
     factor: float
     cause: str
-
-
-# Why a step is cut: a term's iteration did not settle within its solves, a vertex moved further than the
-# contacts allow (g2·w0), a contact penetrated deeper than allowed. Only the first says the solve gave up.
-CUT_CAUSES = ("iteration", "displacement", "penetration")
 
 
 class Term:
