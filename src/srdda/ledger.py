@@ -4,7 +4,7 @@ Balance (J per metre of thickness in 2D):
 
     E(t) = kinetic + gravitational + elastic strain + springs and penalties + contacts
     E(t) - E(0) = W_loads + W_prescribed + W_constraints - D_dashpots - D_friction - D_contact - D_springs
-                  - D_numerical
+                  - D_impact - D_numerical
 
 Every term reports its stored energy (:attr:`srdda.term.Term.energy_kind`)
 and its work per step (:meth:`srdda.term.Term.work`):
@@ -23,9 +23,12 @@ springs) did on the blocks with their step force -k(g + c_p·Δg), minus the
 change of their stored energy: ½k|Δg|² per step with c_p = 1 (DDA's impact
 loss at contacts), plus what state changes or a point update other than T·Δd
 (dda1) put in or took out (:meth:`srdda.constraints.springs.SpringTerm.work`).
+D_impact (``dissipated_impact``): the same for the normal springs of joints
+with a restitution e_n (:mod:`srdda.contact.impact`), whose step loses no
+energy to the spring: their dashpot's loss, the impacts' (1 − e_n²).
 D_numerical is what is left: the time scheme's and the linearisation's own
 dissipation or drift, so ``balance`` = E - W_loads - W_prescribed -
-W_constraints + D_dashpots + D_friction + D_contact + D_springs stays at E(0)
+W_constraints + D_dashpots + D_friction + D_contact + D_springs + D_impact stays at E(0)
 when it is zero.
 
 The gravitational energy is -Σ m g·c over every block, fixed ones included
@@ -60,7 +63,7 @@ def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[s
     out.update(zip(LEDGER, map(float, state.ledger)))
     out["balance"] = out["total"] - out["work_loads"] - out["work_prescribed"] - out["work_constraints"] \
         + out["dissipated"] + out["dissipated_friction"] + out["dissipated_contact"] \
-        + out["dissipated_springs"]
+        + out["dissipated_springs"] + out["dissipated_impact"]
     return out
 
 
