@@ -120,8 +120,8 @@ def impact_damping_ratio(restitution: np.ndarray, omega_dt: np.ndarray) -> np.nd
     oscillator: eigenvalue λ = ω(−ζ + i√(1−ζ²)) maps to z = (1 + λΔt/2)/(1 − λΔt/2)
     per step, and the half turn (phase π) decays by exp(π·Re ln z / Im ln z).
     The ζ that makes that e_n, by bisection (the decay falls with ζ), not the
-    continuous ζ = −ln e/√(π² + ln² e), which rebounds 19 % too fast at
-    e_n = 0.2, ωΔt = 0.9 (docs/contacts.md). ``omega_dt``: ωΔt of the contact.
+    continuous ζ = −ln e/√(π² + ln² e), which rebounds about 20 % too fast
+    at e_n = 0.2, ωΔt = 0.9 (docs/contacts.md). ``omega_dt``: ωΔt of the contact.
     """
     lo, hi = np.zeros(len(restitution)), np.ones(len(restitution))
     half = 0.5 * omega_dt
