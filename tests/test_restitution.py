@@ -5,6 +5,7 @@ import pytest
 
 import srdda
 from srdda.cases.impacts import impact_case, impact_model
+from srdda.contact import ImpactWarning
 from srdda.contact.law import impact_damping_ratio
 from srdda.io import ModelFileError, model_from_dict, save_model, load_model
 from srdda.model import JointMaterial, ModelError
@@ -18,6 +19,7 @@ RATIO = 0.02
 BALANCE = 5e-4
 
 
+@pytest.mark.filterwarnings("error::srdda.contact.ImpactWarning")  # these impacts last 5.5 steps or more
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("on_base", [False, True], ids=["pair", "base"])
 @pytest.mark.parametrize("dt", [1e-4, 2.5e-4, 5e-4, 1e-3])
@@ -84,3 +86,9 @@ def test_restitution_needs_the_open_close_solver_and_shis_step(changes):
     settings = srdda.RunSettings(dt=1e-3, n_steps=1, **changes)
     with pytest.raises(ValueError, match="joint restitution needs contact_solver = 'open-close' and Shi's"):
         srdda.run(impact_model(2, False, 0.5), settings)
+
+
+def test_an_impact_too_short_for_the_step_is_reported():
+    # k_n = 1e10 N/m: ωΔt = 5.7 at 1 ms for the 3D pair, where e_n = 0.2 rebounds at 0.23 (measured 1.138 × e_n)
+    with pytest.warns(ImpactWarning, match=r"lasts under 2.4 steps \(ωΔt > 1.3\)"):
+        impact_case(3, False, 1e-3, 0.2, penalty=1e10)
