@@ -3,7 +3,8 @@
 Prints the tables of docs/contacts.md, "Impacts and restitution": the ratio without a restitution (Shi's
 spring) per Δt and contact solver; with e_n per Δt, 2D and 3D, pair and base, at the cases' penalty
 (ωΔt ≤ 0.57) and at the run's default penalty 1e9 N/m (ωΔt up to 1.8); the same with the continuous
-damping ratio ζ = −ln e/√(π² + ln² e) in place of the calibrated one (the approach tried first).
+damping ratio ζ = −ln e/√(π² + ln² e) in place of the calibrated one (the approach tried first); and at
+stiffer contacts, k_n = 1e10 to 1e12 N/m (ωΔt 2.8 to 57 at 1 ms), where an impact lasts one or two steps.
 
     python benchmarks/probe_restitution.py
 """
@@ -47,6 +48,18 @@ def with_restitution(penalty: float, title: str) -> None:
                   + " |")
 
 
+def stiff() -> None:
+    print("\nStiff contacts: ratio (none) or ratio / e_n at Δt = 0.1 ms / 1 ms\n\n"
+          "| k_n (N/m) | case | none | e_n = 0.2 | e_n = 0.5 | e_n = 1 |\n|---|---|---|---|---|---|")
+    for penalty in (1e10, 1e11, 1e12):
+        for dim, base, label in (CASES[1], CASES[2]):
+            cells = []
+            for e in (None, 0.2, 0.5, 1.0):
+                ratios = [impact_case(dim, base, dt, e, penalty).ratio / (1.0 if e is None else e) for dt in STEPS[::3]]
+                cells.append(" / ".join(f"{r:.3f}" for r in ratios))
+            print(f"| {penalty:g} | {label} | " + " | ".join(cells) + " |")
+
+
 def main() -> None:
     without_restitution()
     with_restitution(IMPACT_PENALTY, "With restitution")
@@ -54,6 +67,7 @@ def main() -> None:
     with mock.patch("srdda.contact.impact.impact_damping_ratio", continuous):
         with_restitution(IMPACT_PENALTY, "Continuous ζ (not kept)")
         with_restitution(1e9, "Continuous ζ (not kept)")
+    stiff()
 
 
 if __name__ == "__main__":
