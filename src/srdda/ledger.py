@@ -4,7 +4,7 @@ Balance (J per metre of thickness in 2D):
 
     E(t) = kinetic + gravitational + elastic strain + springs and penalties + contacts
     E(t) - E(0) = W_loads + W_prescribed + W_constraints - D_dashpots - D_friction - D_contact - D_springs
-                  - D_numerical
+                  - D_impact - D_numerical
 
 Every term reports its stored energy (:attr:`srdda.term.Term.energy_kind`)
 and its work per step (:meth:`srdda.term.Term.work`):
@@ -25,13 +25,16 @@ loss at contacts), plus what state changes or a point update other than T·Δd
 (dda1) put in or took out (:meth:`srdda.constraints.springs.SpringTerm.work`);
 the contacts' change of stored energy counts from what the step's springs hold
 at the gaps detected at t (:meth:`srdda.contact.pipeline.ContactStep.start_energy`).
+D_impact (``dissipated_impact``): the same for the normal springs of joints
+with a restitution e_n (:mod:`srdda.contact.impact`), whose step loses no
+energy to the spring: their dashpot's loss, the impacts' (1 − e_n²).
 Neither ``dissipated_contact`` nor ``dissipated_friction`` ever falls over a
 step (:class:`EnergyWatch` warns when one does).
 D_numerical is what is left: the time scheme's and the linearisation's own
 dissipation or drift (among it the change from the contact energy a step
 committed, at gaps moved by the linearised increments, to that at the next
 step's detected gaps), so ``balance`` = E - W_loads - W_prescribed -
-W_constraints + D_dashpots + D_friction + D_contact + D_springs stays at E(0)
+W_constraints + D_dashpots + D_friction + D_contact + D_springs + D_impact stays at E(0)
 when it is zero.
 
 The gravitational energy is -Σ m g·c over every block, fixed ones included
@@ -67,7 +70,7 @@ def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[s
     out.update(zip(LEDGER, map(float, state.ledger)))
     out["balance"] = out["total"] - out["work_loads"] - out["work_prescribed"] - out["work_constraints"] \
         + out["dissipated"] + out["dissipated_friction"] + out["dissipated_contact"] \
-        + out["dissipated_springs"]
+        + out["dissipated_springs"] + out["dissipated_impact"]
     return out
 
 
@@ -91,7 +94,8 @@ CREATION_TOLERANCE = 0.01
 # difference of coordinates 1e4 times larger; measured 2e-13 on two blocks' impact), a contact that creates
 # energy gives 1e-2 and more (½k_n g² of one impact: 0.5 of it under Chung-Hulbert before issue 29).
 DISSIPATION_ROUNDING = 1e-9
-CONTACT_LOSSES = ("dissipated_contact", "dissipated_friction")  # the ledger's entries that never decrease
+# the ledger's entries that never decrease: what contacts take out
+CONTACT_LOSSES = ("dissipated_contact", "dissipated_friction", "dissipated_impact")
 NAMED_BLOCKS = 3  # blocks a warning names
 
 

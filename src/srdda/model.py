@@ -64,13 +64,16 @@ class Material:
 @dataclass(frozen=True)
 class JointMaterial:
     """Mohr-Coulomb joint: friction angle (degrees), cohesion (Pa), tensile strength (Pa), and optionally
-    its normal and shear stiffness per unit area (Pa/m, as UDEC's and 3DEC's joint kn and ks).
+    its normal and shear stiffness per unit area (Pa/m, as UDEC's and 3DEC's joint kn and ks), and optionally
+    its normal restitution e_n in (0, 1]: the ratio of rebound to approach speed of an impact on the joint.
 
     Without stiffnesses a contact on the joint takes the run's contact penalty
     (``contact_penalty``, N/m per contact: per metre of thickness in 2D), the
     shear stiffness ``shear_ratio`` × that; with them, a contact's springs are
     the joint's stiffness × the joint area it stands for (docs/contacts.md,
-    "Contact stiffness"). A shear stiffness needs a normal one.
+    "Contact stiffness"). A shear stiffness needs a normal one. Without a
+    restitution an impact loses what the time step makes it lose (Shi's
+    spring, docs/contacts.md, "Impacts and restitution").
     """
 
     friction_angle: float = 0.0
@@ -78,6 +81,7 @@ class JointMaterial:
     tensile_strength: float = 0.0
     normal_stiffness: float | None = None
     shear_stiffness: float | None = None
+    restitution: float | None = None
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.friction_angle < 90.0:
@@ -92,6 +96,8 @@ class JointMaterial:
                 raise ModelError(f"joint {name} must be finite and > 0 (Pa/m), got {value}")
         if self.shear_stiffness is not None and self.normal_stiffness is None:
             raise ModelError("joint shear_stiffness needs a normal_stiffness (Pa/m) too")
+        if self.restitution is not None and not 0.0 < self.restitution <= 1.0:
+            raise ModelError(f"joint restitution must lie in (0, 1], got {self.restitution}")
 
 
 @dataclass(frozen=True)
@@ -103,6 +109,7 @@ class JointTable:
     tensile_strength: np.ndarray  # (nj,) Pa
     normal_stiffness: np.ndarray  # (nj,) Pa/m; nan: the run's contact penalty
     shear_stiffness: np.ndarray  # (nj,) Pa/m; nan: shear_ratio × the normal stiffness
+    restitution: np.ndarray  # (nj,) normal restitution e_n; nan: none (Shi's spring)
 
     @classmethod
     def of(cls, joints: Sequence[JointMaterial]) -> JointTable:
@@ -110,7 +117,7 @@ class JointTable:
             return np.array([np.nan if getattr(j, name) is None else getattr(j, name) for j in joints], dtype=float)
 
         return cls(np.radians([j.friction_angle for j in joints]), column("cohesion"), column("tensile_strength"),
-                   column("normal_stiffness"), column("shear_stiffness"))
+                   column("normal_stiffness"), column("shear_stiffness"), column("restitution"))
 
 
 def elasticity_matrix(mat: Material) -> np.ndarray:

@@ -123,6 +123,7 @@ ENERGY_WORDS = {"kinetic": "kinetic energy", "gravity": "gravitational energy (e
                 "dissipated_friction": "energy dissipated by friction",
                 "dissipated_contact": "energy taken out by the contact penalty",
                 "dissipated_springs": "energy taken out by the springs' step force",
+                "dissipated_impact": "energy taken out by impacts with a restitution",
                 "balance": "energy balance E − W_in + D"}
 _COMPONENT_WORDS = {"vx": "velocity x", "vy": "velocity y", "vz": "velocity z", "omega": "angular velocity ω",
                     "omega_x": "angular velocity ωx", "omega_y": "angular velocity ωy",
@@ -651,6 +652,7 @@ LEDGER_PANELS = (
     ("dissipated_friction", "dissipated by friction"),
     ("dissipated_contact", "taken out by the contact penalty\n(impacts, springs released stretched)"),
     ("dissipated_springs", "taken out by the springs' step force\n(negative: put in by the point update)"),
+    ("dissipated_impact", "taken out by impacts with a restitution\n(their dashpot)"),
     ("error", "balance error: E − E₀ − W_in + D\n(time scheme, linearisation)"),
 )
 

@@ -131,6 +131,8 @@ LEDGER_SENTENCES = {
     "dissipated_springs": "Cumulative energy the springs' step force took out (negative: put in, e.g. by a "
                           "point update other than the solved displacement, which then shows in the springs' "
                           "stored energy).",
+    "dissipated_impact": "Cumulative energy the impacts on joints with a restitution e_n took out: their dashpot, "
+                         "(1 − e_n²) of each impact's energy.",
     "error": "Balance error E − E₀ − W_in + D: the time scheme's and the linearisation's own loss or gain; "
              "zero for an exact ledger.",
 }

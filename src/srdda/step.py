@@ -106,6 +106,12 @@ def default_terms(arrays: ModelArrays, settings: RunSettings, contact_law: Conta
     if settings.contacts and arrays.n_blocks > 1:
         w0 = model_half_height(arrays.vertices)
         newton = settings.contact_solver == "newton"
+        if not np.all(np.isnan(arrays.joints.restitution)) and (newton or not method.scheme.is_shi):
+            # the impact law is linearised inside the open-close iteration, and calibrated to Shi's step
+            raise ValueError("joint restitution needs contact_solver = 'open-close' and Shi's time step (scheme "
+                             f"'shi', or 'paper' at rho_inf = 1); this run has contact_solver = "
+                             f"{settings.contact_solver!r}, scheme {method.scheme.name!r}, rho_inf = "
+                             f"{method.scheme.rho_inf:g} (docs/contacts.md, \"Impacts and restitution\")")
         model = (NewtonContactModel if newton else ContactModel)(arrays, contact_parameters(arrays, settings, w0),
                                                                  contact_law)
         if np.any(model.can_touch):

@@ -4,6 +4,7 @@ detector (:mod:`.detect2d`, :mod:`.detect3d`) → :class:`ContactRecord` →
 :class:`ContactSet` / :class:`ContactStep` / :class:`ContactTerm` (:mod:`.pipeline`)
 → the joints' :class:`ContactLaw` (:class:`MohrCoulomb`).
 """
+from .impact import ImpactWarning
 from .law import ContactLaw, ContactStiffness, JointResponse, MohrCoulomb
 from .openclose import LOCKED, OPEN, SLIDING, next_states
 from .pipeline import CONTACT_KINDS, ContactKind, ContactModel, ContactParameters, ContactSet, ContactStep, ContactTerm
@@ -11,4 +12,4 @@ from .record import ContactRecord
 
 __all__ = ["ContactRecord", "ContactLaw", "ContactStiffness", "JointResponse", "MohrCoulomb", "OPEN", "SLIDING",
            "LOCKED", "next_states", "ContactModel", "ContactParameters", "ContactSet", "ContactStep", "ContactTerm",
-           "ContactKind", "CONTACT_KINDS"]
+           "ContactKind", "CONTACT_KINDS", "ImpactWarning"]

@@ -30,6 +30,7 @@ from ..term import LEDGER, StepContext, StepCut, Term
 from .candidates import pair_keys
 from .detect2d import Detector2D
 from .detect3d import Detector3D
+from .impact import ImpactSprings
 from .law import ContactLaw, ContactStiffness, JointResponse, MohrCoulomb
 from .openclose import (LOCKED, OPEN, SLIDING, deepest_penetration, magnitudes, negligible_changes,
                         negligible_force, never_held, next_states)
@@ -162,6 +163,14 @@ class ContactStep:
         self._force_limit: np.ndarray = np.zeros(len(state))  # N, per contact: a change below needs no solve
         # block pairs of the last solve's state changes (for the message of a cut step)
         self.unsettled_pairs = np.column_stack([record.block_a[:0], record.block_b[:0]])
+        # contacts whose joint has a restitution and carries no tension: the impact law instead of Shi's
+        # normal spring (law.impact_force); None where there are none
+        self.impacts: ImpactSprings | None = None
+        if response.restitution is not None:
+            index = np.flatnonzero(~np.isnan(response.restitution) & (response.tension == 0.0))
+            if len(index):
+                self.impacts = ImpactSprings(index, record.block_a[index], record.block_b[index], record.gap[index],
+                                             response.normal_stiffness[index], response.restitution[index])
 
     def __len__(self) -> int:
         return len(self.state)
@@ -219,7 +228,11 @@ class ContactStep:
         ta, tb, tra, _ = self._shapes
         self._solved_state = self.state.copy()  # the states of this solve's forces (for work)
         # by changes while the shapes stay those of the step (Shi's T at t, not the secant pass's)
-        springs.add_to(system, self.state != OPEN, self.state == LOCKED, ctx.coeffs.c_p, by_changes=ctx.theta is None)
+        springs.add_to(system, self._shi_normal(self.state != OPEN), self.state == LOCKED, ctx.coeffs.c_p,
+                       by_changes=ctx.theta is None)
+        if self.impacts is not None:
+            i = self.impacts.index
+            self.impacts.add_to(system, springs.normal_a[i], springs.normal_b[i], ctx)
         sliding = self.state == SLIDING
         # Coulomb friction opposing the slip of x_a over b, N of an earlier solve (Shi 1988), on a's block
         self.applied = np.where(sliding[:, None],
@@ -238,6 +251,14 @@ class ContactStep:
             force = np.einsum("nk,nki->ni", applied, r.frame[sliding])
             scatter_add(system.rhs, a[sliding], np.einsum("nki,nk->ni", ta[sliding], force))
             scatter_add(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tb[sliding], force))
+
+    def _shi_normal(self, closed: np.ndarray) -> np.ndarray:
+        """Of contacts ``closed``, those with Shi's normal spring: all but the impact springs'."""
+        if self.impacts is None:
+            return closed
+        out = closed.copy()
+        out[self.impacts.index] = False
+        return out
 
     def _increments(self, dd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """How the gaps (n,) and shears (n, k) move with increments ``dd``: n·(T_a·Δd_a − T_b·Δd_b) and
@@ -306,7 +327,8 @@ class ContactStep:
         self.state, self.direction = state, direction
         self.iterations += 1
         self.unsettled_pairs = np.column_stack([r.block_a[changed], r.block_b[changed]])
-        return not bool(np.any(changed))
+        impacts_settled = self.impacts is None or self.impacts.settled(self.gap[self.impacts.index])
+        return not bool(np.any(changed)) and impacts_settled
 
     def _negligible(self, new_state: np.ndarray, compression: np.ndarray) -> np.ndarray:
         """Closings and slips below :func:`negligible_force`: they take their new state without another
@@ -383,10 +405,11 @@ class ContactStep:
         """J (per m in 2D) the contacts keep after the step: ½k_n g² of the closed contacts + ½k_s |s|² of
         the locked ones, those held in tension beyond their strength left out (they are committed open)."""
         kept = ~self._held_in_band()
-        closed, locked = (self.state != OPEN) & kept, (self.state == LOCKED) & kept
+        closed, locked = self._shi_normal(self.state != OPEN) & kept, (self.state == LOCKED) & kept
         response = self.response
-        return 0.5 * float(np.sum(response.normal_stiffness[closed] * self.gap[closed] ** 2)) \
+        energy = 0.5 * float(np.sum(response.normal_stiffness[closed] * self.gap[closed] ** 2)) \
             + 0.5 * float(np.sum(response.shear_stiffness[locked, None] * self.shear[locked] ** 2))
+        return energy if self.impacts is None else energy + self.impacts.energy(self.gap[self.impacts.index])
 
     def start_energy(self) -> float:
         """J (per m in 2D) the springs hold at t at the step's detected gaps and stretches: ½k_n g₀² of the
@@ -415,12 +438,18 @@ class ContactStep:
         slip = np.einsum("nki,ni->nk", r.frame, np.einsum("nki,ni->nk", ta, dd[r.block_a])
                          - np.einsum("nki,ni->nk", tb, dd[r.block_b]))
         friction = float(np.sum(self.applied * slip))
-        closed, locked = self._solved_state != OPEN, self._solved_state == LOCKED
+        closed, locked = self._shi_normal(self._solved_state != OPEN), self._solved_state == LOCKED
         dg, ds = self.gap - r.gap, self.shear - self.shear0
         kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
         springs = -float(np.sum((kn * (self.start_gap(c_p) + c_p * dg) * dg)[closed])) \
             - float(np.sum((ks[:, None] * (self.shear0 + c_p * ds) * ds)[locked]))
+        if self.impacts is not None:
+            springs += self.impacts.work(self.gap[self.impacts.index])
         return friction, springs
+
+    def impact_loss(self) -> float:
+        """What the impact springs (contacts with a restitution) took out over the step (J, per m in 2D)."""
+        return 0.0 if self.impacts is None else self.impacts.loss(self.gap[self.impacts.index])
 
 
 UNSETTLED_SHOWN = 3  # block pairs named in the message of a step cut by the open-close
@@ -585,8 +614,10 @@ class ContactTerm(Term):
         friction, springs = self.step.work(dd, ctx.coeffs.c_p)
         stored = self.step.stored_energy() - self.step.start_energy()
         out = np.zeros(len(LEDGER))
+        impact = self.step.impact_loss()
         out[LEDGER.index("dissipated_friction")] = -friction
-        out[LEDGER.index("dissipated_contact")] = -springs - stored
+        out[LEDGER.index("dissipated_contact")] = -springs - stored - impact
+        out[LEDGER.index("dissipated_impact")] = impact
         return out
 
 

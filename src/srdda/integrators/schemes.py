@@ -72,6 +72,11 @@ class TimeScheme:
             raise ValueError(f"time scheme must be one of {SCHEMES}, got {self.name!r}")
         alpha_parameters(self.rho_inf)
 
+    @property
+    def is_shi(self) -> bool:
+        """Whether the step is Shi's: the ``shi`` scheme, or ``paper`` at ρ∞ = 1 (the same coefficients)."""
+        return self.name == "shi" or (self.name == "paper" and self.rho_inf == 1.0)
+
     def coefficients(self, dt: float) -> SchemeCoefficients:
         """The incremental-equation coefficients for time step ``dt``."""
         if self.name == "shi":

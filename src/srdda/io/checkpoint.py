@@ -36,6 +36,7 @@ from typing import Any
 import h5py
 import numpy as np
 
+from ..energy_names import LEDGER
 from ..geometry.polygon import BlockMoments
 from ..geometry.polyhedron import PolyhedronMoments
 from .integrity import Rows, ordered_prefix, read_attr, read_intact, read_text, write_text
@@ -265,6 +266,8 @@ def read_checkpoint(group: h5py.Group, index: int, moments: Any) -> Any:
             entries = {key: _read_optional(group, f"{name}.{key}", index) for key in _mapping_keys(group, name)}
             kwargs[name] = {key: value for key, value in entries.items() if value is not None}
         # a field the file does not have keeps its default (a file written before the field existed)
+    if "ledger" in kwargs and len(kwargs["ledger"]) < len(LEDGER):  # LEDGER grows at its end: new columns from 0
+        kwargs["ledger"] = np.pad(kwargs["ledger"], (0, len(LEDGER) - len(kwargs["ledger"])))
     kwargs["moments"] = moments(kwargs["vertices"])
     if not isinstance(kwargs["moments"], (BlockMoments, PolyhedronMoments)):
         raise TypeError("moments() must return BlockMoments or PolyhedronMoments")

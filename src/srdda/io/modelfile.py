@@ -102,7 +102,8 @@ def _build(spec: ModelFile, source: str, base_dir: Path) -> tuple[Model, RunSett
         model.add_material(name, Material(m.density, m.young, m.poisson, m.plane))
     for name, j in spec.joint_materials.items():
         model.add_joint_material(name, JointMaterial(j.friction_angle, j.cohesion, j.tensile_strength,
-                                                     j.normal_stiffness, j.shear_stiffness), j.between)
+                                                     j.normal_stiffness, j.shear_stiffness, j.restitution),
+                                  j.between)
     names: dict[str, int] = {}
     for i, b in enumerate(spec.blocks):
         label = b.name or f"block {i}"
@@ -385,7 +386,8 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
     if model.joint_materials:
         out["joint_materials"] = {
             n: {"friction_angle": j.friction_angle, "cohesion": j.cohesion, "tensile_strength": j.tensile_strength,
-                **{k: getattr(j, k) for k in ("normal_stiffness", "shear_stiffness") if getattr(j, k) is not None},
+                **{k: getattr(j, k) for k in ("normal_stiffness", "shear_stiffness", "restitution")
+                   if getattr(j, k) is not None},
                 "between": [list(k) for k, v in model.joint_map.items() if v == n]}
             for n, j in model.joint_materials.items()}
     blocks = []

@@ -202,11 +202,13 @@ def _model_arrays(g: h5py.Group, path: str | Path) -> ModelArrays:
             fields = {k[5:]: g[k][()] for k in g if k.startswith("mesh.")}
             kwargs["mesh"] = PolyhedronMesh(**fields) if fields else None
         elif f_.name == "joints" and "joints.friction_angle" in g:
-            kwargs["joints"] = JointTable(**{k[7:]: g[k][()] for k in g if k.startswith("joints.")})
+            columns = {k[7:]: g[k][()] for k in g if k.startswith("joints.")}
+            columns.setdefault("restitution", np.full(len(columns["friction_angle"]), np.nan))  # older files: none
+            kwargs["joints"] = JointTable(**columns)
         elif f_.name == "joints" and "joint_properties" in g:  # files of srdda 0.1.0: (nj, 3) columns
             table = g["joint_properties"][()]
             nan = np.full(len(table), np.nan)
-            kwargs["joints"] = JointTable(table[:, 0], table[:, 1], table[:, 2], nan, nan.copy())
+            kwargs["joints"] = JointTable(table[:, 0], table[:, 1], table[:, 2], nan, nan.copy(), nan.copy())
         elif f_.name in g:
             kwargs[f_.name] = g[f_.name][()]
         elif f_.default is None:  # an optional array (face_joint: 3D faces naming joint materials)

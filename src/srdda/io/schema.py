@@ -65,6 +65,7 @@ class JointMaterialSection(_Strict):
     tensile_strength: Pressure = Field(0.0, ge=0)
     normal_stiffness: JointStiffness | None = Field(None, gt=0)  # Pa/m; None: the run's contact penalty
     shear_stiffness: JointStiffness | None = Field(None, gt=0)  # Pa/m; None: shear_ratio × the normal one
+    restitution: float | None = Field(None, gt=0, le=1)  # e_n; None: Shi's spring (docs/contacts.md)
     between: list[tuple[str, str]] = []
 
 

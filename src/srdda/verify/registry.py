@@ -124,6 +124,8 @@ EXPECTED_SECONDS: dict[str, tuple[float, float]] = {
     "slide-topple-3d": (33.6, 33.6),
     "wedge-3d": (43.2, 43.2),
     "wedge-rest-3d": (19.4, 19.4),
+    "impact-restitution-2d": (6.0, 26.2),
+    "impact-restitution-3d": (7.4, 26.4),
 }
 
 
