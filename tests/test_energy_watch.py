@@ -8,7 +8,8 @@ import pytest
 import srdda
 import srdda.simulation as simulation
 from energy_models import two_blocks_impact
-from srdda.ledger import CONTACT_LOSSES, LEDGER
+from srdda.energy_names import ENERGY_KINDS
+from srdda.ledger import CONTACT_ADVICE, CONTACT_LOSSES, LEDGER, POINT_UPDATE_ADVICE, EnergyWatch
 from srdda.simulation import EnergyWarning
 from srdda.term import Term
 
@@ -123,3 +124,17 @@ def test_two_blocks_impact_gives_no_energy_warning(scheme):
         warnings.simplefilter("error", EnergyWarning)
         result = srdda.run(*two_blocks_impact(scheme, steps=120))
     assert result.completed and max(result.closed_contacts) > 0
+
+
+def test_the_balance_warning_gives_the_advice_it_was_made_with():
+    # dda1's runs are told of its point update (srdda.simulation), the others of the penalty and Δt
+    m = srdda.Model(gravity=(0.0, -10.0))
+    m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+    arrays = m.arrays()
+    state = srdda.run(arrays, srdda.RunSettings(dt=1e-3, n_steps=1)).final_state
+    start = {**dict.fromkeys((*ENERGY_KINDS, *LEDGER), 0.0), "kinetic": 1.0, "balance": 1.0}
+    risen = {**start, "balance": 1.5}  # half the energy in play created
+    for advice in (CONTACT_ADVICE, POINT_UPDATE_ADVICE):
+        given = EnergyWatch(start, advice=advice).check(risen, arrays, state, state)
+        assert len(given) == 1 and given[0].endswith(advice)

@@ -16,7 +16,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .ledger import EnergyWatch, energies
+from .ledger import CONTACT_ADVICE, POINT_UPDATE_ADVICE, EnergyWatch, energies
 from .contact.law import ContactLaw
 from .model import Model, ModelArrays
 from .results import Recorder, Result
@@ -75,7 +75,9 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
         energy = energies(stepper.terms, arrays, state)
         record(state, 0, energy)
         # contacts must never create energy; dda0's and dda1's rotation artefacts (the paper's Tables 1-5) do
-        watch = EnergyWatch(energy) if any(t.energy_kind == "contact" for t in stepper.terms) else None
+        m = stepper.method  # dda1: points moved by the exact rotation of a solve linearised at the start
+        advice = POINT_UPDATE_ADVICE if (m.kinematics, m.linearization) == ("exact-rotation", "start") else CONTACT_ADVICE
+        watch = EnergyWatch(energy, advice=advice) if any(t.energy_kind == "contact" for t in stepper.terms) else None
         with blas_threads_for_steps():
             status, state = _steps(stepper, settings, state, record, watch, progress, stop, summary)
     except BaseException as exc:  # Ctrl-C, an error: a recorder that holds something lets it go
