@@ -76,7 +76,8 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
         record(state, 0, energy)
         # contacts must never create energy; dda0's and dda1's rotation artefacts (the paper's Tables 1-5) do
         m = stepper.method  # dda1: points moved by the exact rotation of a solve linearised at the start
-        advice = POINT_UPDATE_ADVICE if (m.kinematics, m.linearization) == ("exact-rotation", "start") else CONTACT_ADVICE
+        point_update = (m.kinematics, m.linearization) == ("exact-rotation", "start")
+        advice = POINT_UPDATE_ADVICE if point_update else CONTACT_ADVICE
         watch = EnergyWatch(energy, advice=advice) if any(t.energy_kind == "contact" for t in stepper.terms) else None
         with blas_threads_for_steps():
             status, state = _steps(stepper, settings, state, record, watch, progress, stop, summary)

@@ -29,7 +29,8 @@ def run_summary(res: Results, final: State) -> dict[str, Any]:
     """The summary of a run: recorded histories ``res`` and the state the run ended in, ``final``.
 
     Keys (SI units; energies in J per metre of thickness in 2D, J in 3D):
-    ``recorded_steps``, ``last_step`` and ``last_time``; ``cuts`` (step attempts cut, by cause) and ``cut_attempts`` (their sum);
+    ``recorded_steps``, ``last_step`` and ``last_time``; ``cuts`` (step attempts cut, by cause) and
+    ``cut_attempts`` (their sum);
     ``largest_displacement`` and ``largest_speed`` of a block's centroid over
     the recorded steps (``value`` in m or m/s, ``block``, ``time``, ``step``);
     ``final_kinetic_energy`` (in ``energy_unit``); ``energy_balance`` (``error``: the ledger's
