@@ -87,7 +87,8 @@ def test_a_cut_says_its_cause():
     # displacement bound: the bench counts cuts by it (srdda.term.CUT_CAUSES)
     capped = _first_attempt(_sliding_block(), srdda.RunSettings(dt=1e-3, n_steps=1, open_close_max_iterations=1))
     assert (capped.status, capped.cause) == ("cut", "iteration"), capped.reason
-    far = _first_attempt(_falling_block_over_far_ground(), srdda.RunSettings(dt=0.01, n_steps=1, max_displacement_ratio=2e-6))
+    far = _first_attempt(_falling_block_over_far_ground(),
+                         srdda.RunSettings(dt=0.01, n_steps=1, max_displacement_ratio=2e-6))
     assert (far.status, far.cause) == ("cut", "displacement"), far.reason
     ok = _first_attempt(_sliding_block(), srdda.RunSettings(dt=1e-3, n_steps=1))
     assert (ok.status, ok.cause) == ("accepted", "")
