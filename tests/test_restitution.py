@@ -3,11 +3,14 @@
 import numpy as np
 import pytest
 
+from click.testing import CliRunner
+
 import srdda
 from srdda.cases.impacts import impact_case, impact_model
 from srdda.contact import ImpactWarning
 from srdda.contact.law import impact_damping_ratio
 from srdda.io import ModelFileError, model_from_dict, save_model, load_model
+from srdda.cli import main
 from srdda.model import JointMaterial, ModelError
 
 RESTITUTIONS = (0.2, 0.5, 0.8, 1.0)
@@ -86,6 +89,15 @@ def test_restitution_needs_the_open_close_solver_and_shis_step(changes):
     settings = srdda.RunSettings(dt=1e-3, n_steps=1, **changes)
     with pytest.raises(ValueError, match="joint restitution needs contact_solver = 'open-close' and Shi's"):
         srdda.run(impact_model(2, False, 0.5), settings)
+
+
+def test_check_names_restitution_with_the_newton_solver_in_one_line(tmp_path):
+    # srdda check and run compile the model with its settings: one error (exit 2), not a traceback
+    path = tmp_path / "impact.toml"
+    save_model(impact_model(2, False, 0.5), srdda.RunSettings(dt=1e-3, n_steps=1, contact_solver="newton"), path)
+    res = CliRunner().invoke(main, ["check", str(path)])
+    assert res.exit_code == 2 and "joint restitution needs contact_solver = 'open-close'" in res.output
+    assert "Traceback" not in res.output
 
 
 def test_an_impact_too_short_for_the_step_is_reported():

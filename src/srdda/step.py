@@ -29,7 +29,7 @@ from .contact.newton import NewtonContactModel, NewtonContactTerm
 from .contact.pipeline import ContactModel, ContactParameters, ContactTerm
 from .integrators.methods import Method
 from .integrators.secant import SecantPass
-from .model import ModelArrays
+from .model import ModelArrays, ModelError
 from .settings import RunSettings
 from .solvers import LinearSolver, SolverError
 from .state import State
@@ -108,7 +108,7 @@ def default_terms(arrays: ModelArrays, settings: RunSettings, contact_law: Conta
         newton = settings.contact_solver == "newton"
         if not np.all(np.isnan(arrays.joints.restitution)) and (newton or not method.scheme.is_shi):
             # the impact law is linearised inside the open-close iteration, and calibrated to Shi's step
-            raise ValueError("joint restitution needs contact_solver = 'open-close' and Shi's time step (scheme "
+            raise ModelError("joint restitution needs contact_solver = 'open-close' and Shi's time step (scheme "
                              f"'shi', or 'paper' at rho_inf = 1); this run has contact_solver = "
                              f"{settings.contact_solver!r}, scheme {method.scheme.name!r}, rho_inf = "
                              f"{method.scheme.rho_inf:g} (docs/contacts.md, \"Impacts and restitution\")")
