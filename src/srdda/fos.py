@@ -27,10 +27,10 @@ import numpy as np
 from .model import JointTable, Model, ModelArrays, ModelError
 from .settings import RunSettings
 from .simulation import run
-from .step import model_half_height, shi_step_bound
+from .step import shi_step_bound
 
 __all__ = ["FailureCriterion", "FactorOfSafety", "FosError", "Trial", "factor_of_safety", "reduce_strength",
-           "settle_displacements", "judge", "try_factor"]
+           "settle_displacements", "settle_dt", "judge", "rest_threshold", "try_factor"]
 
 # the bracket search doubles (halves) F from ``initial`` this many times at most before giving up
 SEARCH_DOUBLINGS = 10
@@ -49,20 +49,22 @@ class FailureCriterion:
     force takes it in one step) with Δt = ``dt`` (None: Shi's bound
     sqrt(2·g2·w0/|g|), the largest step the displacement limit allows, which
     settles a stable model in a few steps) and the contact solve
-    ``contact_solver`` (Newton: the open-close iteration lets a wedge at FS
-    1.02 creep in static steps). D(k): the largest centroid displacement of a
-    movable block from the start, after step k. With the window w = steps // 3,
-    growth = D(N) − D(N − w) and previous = D(N − w) − D(N − 2w): the model
-    fails when growth > ``creep`` × w0 (w0: half the model's height) and
-    growth ≥ ``decay`` × previous (the rate is not decaying). A run that stops
-    (diverged, Δt below its minimum) fails too.
+    ``contact_solver`` (Newton: the open-close iteration lets the wedge creep
+    in static steps at F = 1, its FS being 1.2). D(k): the largest centroid
+    displacement of a movable block from the start, after step k. With the
+    window w = steps // 3, growth = D(N) − D(N − w) and previous =
+    D(N − w) − D(N − 2w): the model fails when growth ≥ ``decay`` × previous
+    (the rate is not decaying) and growth exceeds the threshold
+    ``acceleration`` × |g| × ½Δt² × w, the growth of a block whose unbalanced
+    acceleration is that fraction of gravity (a static step from rest moves a
+    block ½ a Δt²). A run that stops (diverged, Δt below its minimum) fails too.
     """
 
     steps: int = 60
     dt: float | None = None
     contact_solver: Literal["open-close", "newton"] = "newton"
     decay: float = 0.5
-    creep: float = 1e-6
+    acceleration: float = 1e-4
 
     def __post_init__(self) -> None:
         if self.steps < 6:
@@ -71,8 +73,8 @@ class FailureCriterion:
             raise FosError(f"criterion dt must be a positive time step (s), got {self.dt}")
         if not 0.0 < self.decay <= 1.0:
             raise FosError(f"criterion decay must lie in (0, 1], got {self.decay}")
-        if not 0.0 < self.creep < math.inf:
-            raise FosError(f"criterion creep must be positive, got {self.creep}")
+        if not 0.0 < self.acceleration < math.inf:
+            raise FosError(f"criterion acceleration must be a positive fraction of g, got {self.acceleration}")
 
     @property
     def window(self) -> int:
@@ -87,7 +89,7 @@ class Trial:
     failed: bool
     growth: float  # D(N) − D(N − w): displacement gained over the last window (m)
     previous: float  # D(N − w) − D(N − 2w): over the window before (m)
-    creep: float  # the growth (m) below which the model is at rest: creep × w0
+    threshold: float  # the growth (m) below which the model is at rest: acceleration × |g| × ½Δt² × w
     displacement: float  # D(N) (m)
     status: str  # the run's status ("completed", or why it stopped)
     seconds: float
@@ -141,6 +143,11 @@ def reduce_strength(arrays: ModelArrays, rows: np.ndarray, factor: float) -> Mod
                                              j.restitution))
 
 
+def settle_dt(arrays: ModelArrays, settings: RunSettings, criterion: FailureCriterion) -> float:
+    """Δt of the equilibrium runs: the criterion's, else Shi's bound (:func:`~srdda.step.shi_step_bound`)."""
+    return criterion.dt if criterion.dt is not None else shi_step_bound(arrays, settings) or settings.dt
+
+
 def settle_displacements(arrays: ModelArrays, settings: RunSettings, criterion: FailureCriterion
                          ) -> tuple[np.ndarray, str]:
     """The run that is judged: the equilibrium run of ``arrays`` from rest, and D(k) after every step.
@@ -149,7 +156,7 @@ def settle_displacements(arrays: ModelArrays, settings: RunSettings, criterion: 
     block from the start (m), the run's status). The one place where the
     equilibrium run is made: an equilibrium stage's settle may replace it.
     """
-    dt = criterion.dt if criterion.dt is not None else shi_step_bound(arrays, settings) or settings.dt
+    dt = settle_dt(arrays, settings, criterion)
     static = replace(settings, velocity_ratio=0.0, contact_solver=criterion.contact_solver, dt=dt,
                      n_steps=criterion.steps, end_time=None, record_every=1, min_dt=None)
     result = run(arrays, static, keep_vertices=False)
@@ -159,18 +166,24 @@ def settle_displacements(arrays: ModelArrays, settings: RunSettings, criterion: 
     return (moved.max(axis=1) if moved.shape[1] else np.zeros(len(moved))), result.status
 
 
-def judge(factor: float, displacement: np.ndarray, status: str, criterion: FailureCriterion, w0: float,
+def judge(factor: float, displacement: np.ndarray, status: str, criterion: FailureCriterion, threshold: float,
           seconds: float = 0.0, notes: tuple[str, ...] = ()) -> Trial:
-    """The verdict of :class:`FailureCriterion` on the displacements D(k) of a run at ``factor``."""
+    """The verdict of :class:`FailureCriterion` on the displacements D(k) of a run at ``factor``
+    (``threshold``: :func:`rest_threshold`)."""
     w = criterion.window
     n = len(displacement) - 1
     completed = status == "completed" and n >= 2 * w
     growth = float(displacement[n] - displacement[n - w]) if completed else math.nan
     previous = float(displacement[n - w] - displacement[n - 2 * w]) if completed else math.nan
-    creep = criterion.creep * w0
-    failed = not completed or (growth > creep and growth >= criterion.decay * previous)
-    return Trial(float(factor), bool(failed), growth, previous, creep, float(displacement[-1]), status, seconds,
+    failed = not completed or (growth > threshold and growth >= criterion.decay * previous)
+    return Trial(float(factor), bool(failed), growth, previous, threshold, float(displacement[-1]), status, seconds,
                  notes)
+
+
+def rest_threshold(arrays: ModelArrays, settings: RunSettings, criterion: FailureCriterion) -> float:
+    """The growth over a window (m) below which a model is at rest: acceleration × |g| × ½Δt² × w."""
+    dt = settle_dt(arrays, settings, criterion)
+    return criterion.acceleration * float(np.linalg.norm(arrays.gravity)) * 0.5 * dt * dt * criterion.window
 
 
 def try_factor(arrays: ModelArrays, settings: RunSettings, rows: np.ndarray, factor: float,
@@ -181,7 +194,7 @@ def try_factor(arrays: ModelArrays, settings: RunSettings, rows: np.ndarray, fac
         warnings.simplefilter("always")
         displacement, status = settle_displacements(reduce_strength(arrays, rows, factor), settings, criterion)
     notes = tuple(sorted({str(w.message) for w in caught}))
-    return judge(factor, displacement, status, criterion, model_half_height(arrays.vertices),
+    return judge(factor, displacement, status, criterion, rest_threshold(arrays, settings, criterion),
                  time.perf_counter() - start, notes)
 
 
@@ -227,6 +240,8 @@ def factor_of_safety(model: Model, settings: RunSettings, joints: Sequence[str] 
         raise FosError(str(exc)) from None
     if arrays.block_fixed.all():
         raise FosError("every block is fixed: nothing can fail")
+    if not np.any(arrays.gravity):
+        raise FosError("the model has no gravity: strength reduction brings a model to rest under its weight")
     trials: list[Trial] = []
     stable: float | None = None
     failed: float | None = None
