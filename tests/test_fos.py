@@ -183,3 +183,18 @@ def test_a_failing_wedge_moves_half_its_unbalanced_acceleration_per_static_step(
         trial = try_factor(arrays, settings, np.arange(2), factor, criterion)
         acceleration = trial.growth / (criterion.window * 0.5 * dt * dt)
         assert acceleration == pytest.approx(9.81 * math.sin(plunge) * (1.0 - 1.2 / factor), rel=1e-5)
+
+
+def test_the_bracket_is_found_from_above_and_below():
+    # from F = 4 the search halves, from F = 0.3 it doubles: both end in a bracket holding the closed form's FS
+    # (within the 2 % of the acceptance) no wider than the tolerance
+    model = plane_failure_model(PLANE_FAILURE, young=1e12)
+    settings = RunSettings(dt=1e-3, n_steps=1, contact_penalty=1e10)
+    exact = PLANE_FAILURE.factor_of_safety()
+    for initial in (4.0, 0.3):
+        fos = factor_of_safety(model, settings, tolerance=0.01, initial=initial)
+        assert fos.failed - fos.stable <= 0.01 * fos.stable
+        assert fos.stable * 0.98 < exact < fos.failed * 1.02
+        assert fos.trials[0].failed == (initial > exact)
+    with pytest.raises(FosError, match="joints: unknown joint material 'nope'; the model's are: 'plane'"):
+        factor_of_safety(model, settings, joints=["nope"])

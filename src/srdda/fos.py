@@ -125,10 +125,12 @@ def _joint_rows(model: Model, joints: Sequence[str] | None) -> tuple[np.ndarray,
     names = list(model.joint_materials)
     if joints is None:
         return np.arange(len(names) + 1), ("default", *names)
+    if not joints:
+        raise FosError("joints: name at least one joint material (or give None: all)")
     unknown = [j for j in joints if j not in model.joint_materials]
-    if unknown or not joints:
+    if unknown:
         raise FosError(f"joints: unknown joint material {', '.join(map(repr, unknown))}; the model's are: "
-                       f"{', '.join(map(repr, names)) or 'none'}" if unknown else "joints: name at least one")
+                       f"{', '.join(map(repr, names)) or 'none'}")
     return np.array([names.index(j) + 1 for j in joints]), tuple(joints)
 
 
@@ -152,14 +154,17 @@ def settle_displacements(arrays: ModelArrays, settings: RunSettings, criterion: 
                          ) -> tuple[np.ndarray, str]:
     """The run that is judged: the equilibrium run of ``arrays`` from rest, and D(k) after every step.
 
-    Returns (D (steps + 1,): the largest centroid displacement of a movable
+    The blocks start at rest (initial velocities are left out), in their
+    initial positions and stresses. Returns (D (steps + 1,): the largest
+    centroid displacement of a movable
     block from the start (m), the run's status). The one place where the
     equilibrium run is made: an equilibrium stage's settle may replace it.
     """
     dt = settle_dt(arrays, settings, criterion)
     static = replace(settings, velocity_ratio=0.0, contact_solver=criterion.contact_solver, dt=dt,
                      n_steps=criterion.steps, end_time=None, record_every=1, min_dt=None)
-    result = run(arrays, static, keep_vertices=False)
+    at_rest = replace(arrays, velocity=np.zeros_like(arrays.velocity))  # the model's initial velocities left out
+    result = run(at_rest, static, keep_vertices=False)
     movable = ~arrays.block_fixed
     centroid = result.array("centroid")[:, movable]
     moved = np.linalg.norm(centroid - centroid[0], axis=-1)
@@ -222,8 +227,9 @@ def factor_of_safety(model: Model, settings: RunSettings, joints: Sequence[str] 
     included); ``tolerance``: the bracket [stable, failed] is narrowed until
     failed − stable ≤ tolerance × stable; ``initial``: the first factor tried;
     ``points``: factors tried per round. ``workers`` (processes of a local
-    Dask cluster) or ``scheduler`` (a running one's address) run each round's
-    factors in parallel; without them they run here, one after the other.
+    Dask cluster; ``processes=False``: threads of this process, for tests) or
+    ``scheduler`` (a running one's address) run each round's factors in
+    parallel; without them they run here, one after the other.
     ``progress(trial)`` is called after each trial.
     """
     criterion = criterion or FailureCriterion()
