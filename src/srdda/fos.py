@@ -175,11 +175,12 @@ def judge(factor: float, displacement: np.ndarray, status: str, criterion: Failu
           seconds: float = 0.0, notes: tuple[str, ...] = ()) -> Trial:
     """The verdict of :class:`FailureCriterion` on the displacements D(k) of a run at ``factor``
     (``threshold``: :func:`rest_threshold`)."""
-    w = criterion.window
-    n = len(displacement) - 1
-    completed = status == "completed" and n >= 2 * w
-    growth = float(displacement[n] - displacement[n - w]) if completed else math.nan
-    previous = float(displacement[n - w] - displacement[n - 2 * w]) if completed else math.nan
+    last = len(displacement) - 1
+    middle = last - criterion.window  # the steps ending the two windows judged
+    first = middle - criterion.window
+    completed = status == "completed" and first >= 0
+    growth = float(displacement[last] - displacement[middle]) if completed else math.nan
+    previous = float(displacement[middle] - displacement[first]) if completed else math.nan
     failed = not completed or (growth > threshold and growth >= criterion.decay * previous)
     return Trial(float(factor), bool(failed), growth, previous, threshold, float(displacement[-1]), status, seconds,
                  notes)
