@@ -1,5 +1,6 @@
 """Constraints and driven boundaries: fixed points, point loads, springs with dashpots, hinges and pins by
-Lagrange multipliers, prescribed motion (penalty or multipliers), base acceleration, rock bolts.
+Lagrange multipliers, prescribed motion (penalty or multipliers), base acceleration, rock bolts, the water in
+the joints and tension cracks (:mod:`.water`).
 
 ``point_terms(arrays, penalty)`` gives the step terms (:class:`srdda.term.Term`)
 a model's points need. See docs/constraints.md.
