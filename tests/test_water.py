@@ -156,7 +156,7 @@ def test_the_water_cases_pass():
             *run_case("water-plane-2d", methods=("srdda",)), *run_case("water-plane-3d", methods=("srdda",))]
     failed = [r for r in rows if r["passed"] is False]
     assert not failed, failed
-    assert len(rows) == 10  # 2 + 2 uplift rows, 3 + 3 plane rows
+    assert len(rows) == 14  # 2 + 2 uplift rows, 5 + 5 plane rows
 
 
 def test_the_ledger_books_the_water_and_closes():
@@ -213,3 +213,15 @@ def test_contacts_on_a_crack_take_the_cracks_water_not_the_tables():
     assert np.all(force[~on_crack] > 0.0)
     _, blocks = crack_facets(arrays, arrays.water.cracks[0])
     assert blocks.tolist() == [1]  # the moving block's face only: the fixed one's cannot move
+
+
+def test_the_newton_contact_solve_carries_the_effective_force():
+    """contact_solver = "newton" adds the same water forces: the joint carries W − p·A (water-uplift-2d)."""
+    from srdda.verify.water import UPLIFT_EFFECTIVE, UPLIFT_LEVEL, _uplift_model
+
+    model = _uplift_model(2)
+    res = srdda.run(model, RunSettings(dt=1e-3, n_steps=200, penalty=1e10, contact_solver="newton"))
+    assert res.final_state is not None and res.final_state.contacts is not None
+    weight = float(model.arrays().block_mass[1]) * 10.0
+    expected = weight - UNIT_WEIGHT * UPLIFT_LEVEL * 2.0
+    assert float(np.sum(res.final_state.contacts.normal_force)) == pytest.approx(expected, rel=UPLIFT_EFFECTIVE)

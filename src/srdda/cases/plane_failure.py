@@ -24,6 +24,7 @@ origin (its toe at the origin), with vertical faces of height H at the toe and
 at the back (the crack's face), so that its weight acts over the middle of its
 base and the release does not rock it; the phreatic surface is parallel to the incline, the
 uniform ``head`` above it (vertical), so U and V stay the same as it slides.
+:func:`set_hoek_bray_water` gives it Hoek & Bray's water instead (docs/water.md).
 """
 from __future__ import annotations
 
@@ -33,6 +34,7 @@ from ..constraints.water import UNIT_WEIGHT
 from ..model import JointMaterial, Material, Model
 
 __all__ = ["plane_failure_factor", "plane_failure_acceleration", "wet_plane_model", "wet_plane_forces",
+           "set_hoek_bray_water",
            "PLANE_DIP", "PLANE_G", "BASE_LENGTH", "CRACK_HEIGHT", "DENSITY"]
 
 PLANE_DIP, PLANE_G = 30.0, 10.0  # ψ (°), g (m/s²)
@@ -93,3 +95,13 @@ def wet_plane_forces(head: float | None, crack_depth: float) -> tuple[float, flo
     uplift = 0.0 if head is None else UNIT_WEIGHT * max(head, 0.0) * BASE_LENGTH
     crack = 0.0 if head is None else 0.5 * UNIT_WEIGHT * crack_depth**2
     return mass * PLANE_G, mass, uplift, crack
+
+
+def set_hoek_bray_water(model: Model, crack_depth: float) -> None:
+    """Hoek & Bray's water on :func:`wet_plane_model`'s block: the crack filled ``crack_depth`` (z_w) deep and
+    the phreatic line from its water surface to the toe, so the pressure on the sliding plane falls linearly
+    from γ_w·z_w at the crack to 0 at the toe (U = ½γ_w·z_w·L, V = ½γ_w·z_w²)."""
+    toe, bottom = _corners()[0], _corners()[1]
+    rise = bottom[1] + crack_depth - toe[1]
+    model.set_water(point=toe, normal=(-rise, bottom[0] - toe[0]), unit_weight=UNIT_WEIGHT,
+                    cracks=[(bottom, (1.0, 0.0), crack_depth)])

@@ -255,13 +255,17 @@ class WaterCrackTerm(Term):
 
     def begin(self, ctx: StepContext) -> None:
         """The wetted simplices' resultants at the configuration at t."""
-        water = ctx.arrays.water
-        dim = ctx.state.vertices.shape[1]
+        self.blocks, self.points, self.forces = self.resultants(ctx.arrays, ctx.state.vertices)
+
+    def resultants(self, arrays: ModelArrays, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(blocks (n,), centres of pressure (n, dim), forces (n, dim)) of the wetted crack simplices of
+        ``arrays.water`` at ``vertices``, N (per m in 2D)."""
+        water = arrays.water
+        dim = vertices.shape[1]
         if water is None or not water.cracks:
-            self.blocks, self.points, self.forces = self._blocks[:0], np.empty((0, dim)), np.empty((0, dim))
-            return
-        self._resolve(ctx.arrays)
-        x = ctx.state.vertices[self._facets]
+            return self._blocks[:0], np.empty((0, dim)), np.empty((0, dim))
+        self._resolve(arrays)
+        x = vertices[self._facets]
         elevation = x @ np.asarray(water.up)
         bottom = np.full(len(water.cracks), np.inf)  # each crack's lowest point now
         np.minimum.at(bottom, self._crack, np.min(elevation, axis=1))
@@ -269,9 +273,8 @@ class WaterCrackTerm(Term):
         head = surface[self._crack][:, None] - elevation
         integral, first = submerged_integrals(x, head)
         wet = integral > 0.0
-        self.blocks = self._blocks[wet]
-        self.points = first[wet] / integral[wet, None]
-        self.forces = -water.unit_weight * integral[wet, None] * area_vectors(x[wet])
+        return (self._blocks[wet], first[wet] / integral[wet, None],
+                -water.unit_weight * integral[wet, None] * area_vectors(x[wet]))
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         if len(self.blocks):

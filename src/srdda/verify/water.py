@@ -6,11 +6,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..cases.plane_failure import (PLANE_DIP, plane_failure_acceleration, plane_failure_factor, wet_plane_forces,
-                                   wet_plane_model)
-from ..constraints.water import contact_water
+from ..cases.plane_failure import (BASE_LENGTH, PLANE_DIP, plane_failure_acceleration, plane_failure_factor,
+                                   set_hoek_bray_water, wet_plane_forces, wet_plane_model)
+from ..constraints.water import UNIT_WEIGHT, WaterCrackTerm, contact_water
 from ..contact.pipeline import ContactModel
-from ..model import JointMaterial, Material, Model
+from ..model import JointMaterial, Material, Model, ModelArrays
 from ..results import Result
 from ..settings import RunSettings
 from ..simulation import run
@@ -46,6 +46,14 @@ PLANE_ACCELERATION = 1e-4
 PLANE_AT_REST = 1e-4  # m
 
 
+# Hoek & Bray's water on the same block (srdda.cases.plane_failure.set_hoek_bray_water: the crack 1 m deep, the
+# phreatic line from its water surface to the toe): at the start the uplift is ½γ_w·z_w·L and the crack's force
+# ½γ_w·z_w², an identity of the contacts' tributary lengths (areas) and of the wetted face's exact integral:
+# round-off (measured 0).
+HOEK_BRAY_DEPTH = 1.0
+HOEK_BRAY_IDENTITY = 1e-12
+
+
 def _completed(result: Result, what: str) -> Result:
     if not result.completed:
         raise RuntimeError(f"{what}: the run did not complete ({result.status})")
@@ -65,8 +73,30 @@ def _plane_model(dim: int, water: tuple[float, float] | None) -> Model:
     return wet_plane_model(FRICTION, water[0], water[1], young=young)
 
 
+def _contact_water(arrays: ModelArrays, penalty: float) -> float:
+    """Σ of the water forces of the contacts of ``arrays`` as built, N (per m in 2D)."""
+    settings = RunSettings(dt=PLANE_DT, n_steps=1, penalty=penalty)
+    contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertices)))
+    step = contacts.prepare(arrays.vertices, None, True)
+    assert step is not None and arrays.water is not None
+    return float(np.sum(contact_water(arrays.water, step.record, contacts.params.distance)))
+
+
+def _hoek_bray_rows(name: str, dim: int) -> list[Row]:
+    model = wet_plane_model(FRICTION)
+    set_hoek_bray_water(model, HOEK_BRAY_DEPTH)
+    arrays = (model if dim == 2 else model.extruded(1.0)).arrays()
+    uplift = _contact_water(arrays, PLANE_PENALTY)
+    _, _, forces = WaterCrackTerm(arrays).resultants(arrays, arrays.vertices)
+    crack = float(np.linalg.norm(np.sum(forces, axis=0)))
+    return [row(name, "Hoek & Bray's uplift U (N/m) = ½γ_w·z_w·L", "-", uplift,
+                0.5 * UNIT_WEIGHT * HOEK_BRAY_DEPTH * BASE_LENGTH, HOEK_BRAY_IDENTITY),
+            row(name, "Hoek & Bray's crack force V (N/m) = ½γ_w·z_w²", "-", crack,
+                0.5 * UNIT_WEIGHT * HOEK_BRAY_DEPTH**2, HOEK_BRAY_IDENTITY)]
+
+
 def _plane_rows(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
-    rows: list[Row] = []
+    rows = _hoek_bray_rows(name, dim)
     weight, mass, _, _ = wet_plane_forces(None, 0.0)
     dry_fs = plane_failure_factor(weight, PLANE_DIP, FRICTION)
     _, _, u, v = wet_plane_forces(*SLIDING)
@@ -90,7 +120,7 @@ def _plane_rows(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
 
 
 @case("water-plane-2d", dim=2, methods=("dda1", "srdda"),
-      description="plane failure with water: dry and a little water at rest, wet sliding at Hoek & Bray's a")
+      description="plane failure with water: Hoek & Bray's U and V; dry and a little water at rest, wet sliding at a")
 def water_plane_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
     return _plane_rows("water-plane-2d", 2, methods)
 
@@ -138,15 +168,11 @@ def _uplift_rows(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
     model = _uplift_model(dim)
     arrays = model.arrays()
     area = 2.0 if dim == 2 else 4.0
-    pressure = 9810.0 * UPLIFT_LEVEL
+    pressure = UNIT_WEIGHT * UPLIFT_LEVEL
     penalty = 1e10 if dim == 2 else 5e9
     settings = RunSettings(dt=1e-3, n_steps=UPLIFT_STEPS, penalty=penalty)
-    contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertices)))
-    step = contacts.prepare(arrays.vertices, None, True)
-    assert step is not None and arrays.water is not None
-    water = contact_water(arrays.water, step.record, contacts.params.distance)
-    rows = [row(name, "Σ contact water forces / (p × area)", "-", float(np.sum(water)) / (pressure * area), 1.0,
-                UPLIFT_IDENTITY)]
+    rows = [row(name, "Σ contact water forces / (p × area)", "-", _contact_water(arrays, penalty) / (pressure * area),
+                1.0, UPLIFT_IDENTITY)]
     weight = float(arrays.block_mass[1]) * 10.0
     for method in methods:
         res = _completed(run(model, replace(settings, method=method)), f"{name} {method}")
