@@ -196,6 +196,7 @@ def test_contacts_on_a_crack_take_the_cracks_water_not_the_tables():
     surface, the crack's faces the crack's water; the sliding plane's contacts the surface's."""
     from srdda.constraints.water import contact_water, crack_facets
     from srdda.contact.pipeline import ContactModel
+    from srdda.geometry.facets import boundary_simplices
     from srdda.step import contact_parameters, model_half_height
 
     model = wet_plane_model(40.0)
@@ -209,7 +210,8 @@ def test_contacts_on_a_crack_take_the_cracks_water_not_the_tables():
     contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertices)))
     step = contacts.prepare(arrays.vertices, None, True)
     assert step is not None and arrays.water is not None
-    force = contact_water(arrays.water, step.record, contacts.params.distance)
+    force = contact_water(arrays.water, step.record, contacts.params.distance, arrays.vertices,
+                          boundary_simplices(arrays))
     on_crack = np.abs(step.record.normal[:, 0]) > 0.999
     assert on_crack.any() and (~on_crack).any()
     assert np.all(force[on_crack] == 0.0)
@@ -228,3 +230,37 @@ def test_the_newton_contact_solve_carries_the_effective_force():
     weight = float(model.arrays().block_mass[1]) * 10.0
     expected = weight - UNIT_WEIGHT * UPLIFT_LEVEL * 2.0
     assert float(np.sum(res.final_state.contacts.normal_force)) == pytest.approx(expected, rel=UPLIFT_EFFECTIVE)
+
+
+@pytest.mark.parametrize("level", [10.0, 3.0, 1.0])
+def test_a_wedge_gets_the_water_on_each_plane(level):
+    """The tetrahedral wedge (srdda.cases.slope3d, 6 m high) under a level above it, through it, near its toe:
+    the water forces of each plane's contacts add up to γ_w ∫max(h, 0) dA over the wedge's face on it (the
+    wetted integral, checked against shapely above), though a slab's corner also touches the wedge's face
+    (its bond is left out: one side per joint)."""
+    from srdda.cases.slope3d import wedge_model
+    from srdda.constraints.water import contact_water
+    from srdda.contact.pipeline import ContactModel
+    from srdda.geometry.facets import area_vectors, boundary_simplices
+    from srdda.step import contact_parameters, model_half_height
+
+    model = wedge_model(30.0)
+    model.set_water(level=level)
+    arrays = model.arrays()
+    settings = RunSettings(dt=1e-3, n_steps=1, penalty=1e11)
+    contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertices)))
+    step = contacts.prepare(arrays.vertices, None, True)
+    assert step is not None and arrays.water is not None
+    record = step.record
+    force = contact_water(arrays.water, record, contacts.params.distance, arrays.vertices, boundary_simplices(arrays))
+    mesh = arrays.mesh
+    x = arrays.vertices[mesh.tri[mesh.tri_block == 0]]
+    areas = area_vectors(x)
+    integral, _ = submerged_integrals(x, level - x[..., 2])
+    for plane in (1, 2):
+        on = (record.block_a == plane) | (record.block_b == plane)
+        normal = record.normal[on][0]
+        faces = np.abs(areas @ normal) > 0.999 * np.linalg.norm(areas, axis=1)
+        exact = UNIT_WEIGHT * float(np.linalg.norm((integral[faces, None] * areas[faces]).sum(axis=0)))
+        assert exact > 0.0
+        assert float(np.sum(force[on])) == pytest.approx(exact, rel=1e-12)  # sums of the same terms: round-off

@@ -26,6 +26,7 @@ from numba import njit
 
 from ..assembly.system import BlockSystem, scatter_add
 from ..constraints.water import contact_water
+from ..geometry.facets import boundary_simplices
 from ..model import ModelArrays
 from ..term import LEDGER, StepContext, StepCut, Term
 from .candidates import pair_keys
@@ -566,7 +567,8 @@ class ContactTerm(Term):
         self.step = self.model.prepare(state.vertices, state.contacts, state.step == 0)
         water = ctx.arrays.water
         if self.step is not None and water is not None:
-            self.step.water = contact_water(water, self.step.record, self.model.params.distance)
+            self.step.water = contact_water(water, self.step.record, self.model.params.distance, state.vertices,
+                                            boundary_simplices(ctx.arrays))
 
     @property
     def at_points(self) -> bool:
