@@ -259,8 +259,8 @@ class Detector3D:
         owner = np.repeat(np.arange(len(found)), counts)
         corner = topo.vertex_corner[np.repeat(start - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
         face = topo.corner_face[corner]
-        fraction = 1.0 / np.diff(self.mesh.face_ptr)[face]
-        share = surface.face_area[face] * fraction
+        count = np.diff(self.mesh.face_ptr)[face]
+        share = surface.face_area[face] / count
         facing = np.einsum("ni,ni->n", surface.face_normal[face], normal[owner]) <= -self.cos_parallel
         bond = np.bincount(owner, weights=np.where(facing, share, 0.0), minlength=len(found))
         smallest = np.full(len(found), np.inf)
@@ -270,4 +270,4 @@ class Detector3D:
             faces = surface.face_area[edges] / np.diff(self.mesh.face_ptr)[edges]
             smallest[~vf] = np.min(faces, axis=1)
         return bond, np.where(bond > 0.0, bond, smallest), (owner[facing], face[facing].astype(np.int64),
-                                                             fraction[facing])
+                                                             1.0 / count[facing])
