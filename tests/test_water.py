@@ -29,6 +29,8 @@ def test_head_is_the_height_of_the_surface_above_the_point():
     sloped = water_table((0.0, -9.81), point=(0.0, 1.0), normal=(-1.0, 2.0))
     assert sloped.head(np.array([[4.0, 0.0]]))[0] == pytest.approx(3.0, rel=1e-15)
     assert sloped.raised(-0.5).head(np.array([[4.0, 0.0]]))[0] == pytest.approx(2.5, rel=1e-15)
+    assert flat.at_level(-0.5).head(np.array([[5.0, -1.0]]))[0] == pytest.approx(0.5, rel=1e-15)
+    assert flat.at_level(-0.5).level() == pytest.approx(-0.5, rel=1e-15)
     # 3D, gravity along -z: the level is a height in z
     assert water_table((0.0, 0.0, -10.0), level=1.0).head(np.array([[7.0, -3.0, 0.25]]))[0] == 0.75
     # a 3D plane z = 1 + y/2: above (5, 4, 0) it stands at 3

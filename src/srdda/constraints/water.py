@@ -87,7 +87,7 @@ class WaterTable:
     """The phreatic surface (the plane through ``point`` with the upward unit ``normal``), the water's unit
     weight γ_w (N/m³) and the tension cracks (module doc). ``up``: the unit vector against gravity.
 
-    Change it between runs with :meth:`raised` or :func:`dataclasses.replace` on the model's
+    Change it between runs with :meth:`at_level`, :meth:`raised` or :func:`dataclasses.replace` on the model's
     (``Model.water``) or the arrays' (``ModelArrays.water``) table.
     """
 
@@ -109,6 +109,11 @@ class WaterTable:
     def raised(self, by: float) -> WaterTable:
         """The table with its surface ``by`` m higher (negative: a drawdown); the cracks' water unchanged."""
         return replace(self, point=tuple(float(p) for p in np.asarray(self.point) + by * np.asarray(self.up)))
+
+    def at_level(self, level: float) -> WaterTable:
+        """The table with its surface moved up or down so that it stands at elevation ``level`` (m, against
+        gravity) above its point (a horizontal surface: at ``level`` everywhere); the cracks' water unchanged."""
+        return self.raised(level - self.level())
 
     def level(self) -> float:
         """The surface's elevation (along ``up``) at the point it was given by, m."""
