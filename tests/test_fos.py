@@ -9,8 +9,8 @@ import pytest
 from click.testing import CliRunner
 
 from srdda import JointMaterial, Material, Model, RunSettings
-from srdda.cases.plane2d import (PLANE_FAILURE, plane_failure_factor_of_safety, plane_failure_model,
-                                 plane_failure_water_forces)
+from srdda.cases.plane_failure import (PLANE_FAILURE, plane_failure_factor, plane_failure_model,
+                                       plane_failure_water_forces)
 from srdda.cases.slope3d import (WEDGE_PLANES, HoekBrayAngles, hoek_bray_wedge_angles,
                                  hoek_bray_wedge_factor_of_safety, wedge_friction_for, wedge_model, wedge_solution,
                                  wedge_vertices)
@@ -28,13 +28,13 @@ def test_plane_failure_with_water_against_a_hand_computation():
     #    = [400,000 + 1,526,040.8·0.4663077] / 1,016,991.4 = 1,111,604.5 / 1,016,991.4 = 1.093032
     u, v = plane_failure_water_forces(20.0, 2.0)
     assert (u, v) == pytest.approx((196_200.0, 19_620.0), rel=1e-12)
-    fs = plane_failure_factor_of_safety(2e6, 20.0, 30.0, 25.0, 20e3, u, v)
+    fs = plane_failure_factor(2e6, 30.0, 25.0, u, v, cohesion=20e3, area=20.0)
     assert fs == pytest.approx(1.093032, rel=2e-6)  # the hand computation's 7 digits
 
 
 def test_plane_failure_dry_is_resisting_over_driving():
     # dry, no cohesion: FS = tan φ / tan ψ exactly
-    assert plane_failure_factor_of_safety(1.0, 1.0, 30.0, 25.0, 0.0) == pytest.approx(
+    assert plane_failure_factor(1.0, 30.0, 25.0) == pytest.approx(
         math.tan(math.radians(25)) / math.tan(math.radians(30)), rel=1e-14)
 
 

@@ -13,6 +13,7 @@ True
 """
 from . import threads as _threads  # first: how numba's threads wait, before they start (srdda.threads)
 from .constraints import MotionHistory, hinge_forces
+from .constraints.water import TensionCrack, WaterTable
 from .history import TimeHistory
 from .contact import ContactSet
 from .geometry import PolygonError, block_moments
@@ -35,7 +36,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "METHODS", "ContactSet", "JointMaterial", "Load", "Material", "Method", "Model", "ModelError",
-    "MotionHistory", "PolygonError", "TimeHistory", "hinge_forces",
+    "MotionHistory", "PolygonError", "TimeHistory", "hinge_forces", "TensionCrack", "WaterTable",
     "Result", "RunSettings", "State", "TimeScheme", "available_solvers", "block_moments",
     "get_solver", "method_preset", "run", "__version__", "ResultsStore", "StoredResult", "read_results", "resume",
     "BlockCut", "CuttingError", "JointSet", "add_cut_blocks", "circular_opening", "cut_blocks", "joint_traces",

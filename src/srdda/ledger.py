@@ -3,8 +3,8 @@
 Balance (J per metre of thickness in 2D):
 
     E(t) = kinetic + gravitational + elastic strain + springs and penalties + contacts
-    E(t) - E(0) = W_loads + W_prescribed + W_constraints - D_dashpots - D_friction - D_contact - D_springs
-                  - D_impact - D_numerical
+    E(t) - E(0) = W_loads + W_prescribed + W_constraints + W_water - D_dashpots - D_friction - D_contact
+                  - D_springs - D_impact - D_numerical
 
 Every term reports its stored energy (:attr:`srdda.term.Term.energy_kind`)
 and its work per step (:meth:`srdda.term.Term.work`):
@@ -34,7 +34,7 @@ D_numerical is what is left: the time scheme's and the linearisation's own
 dissipation or drift (among it the change from the contact energy a step
 committed, at gaps moved by the linearised increments, to that at the next
 step's detected gaps), so ``balance`` = E - W_loads - W_prescribed -
-W_constraints + D_dashpots + D_friction + D_contact + D_springs + D_impact stays at E(0)
+W_constraints - W_water + D_dashpots + D_friction + D_contact + D_springs + D_impact stays at E(0)
 when it is zero.
 
 The gravitational energy is -Σ m g·c over every block, fixed ones included
@@ -69,6 +69,7 @@ def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[s
     out["total"] = sum(out[k] for k in ENERGY_KINDS)
     out.update(zip(LEDGER, map(float, state.ledger)))
     out["balance"] = out["total"] - out["work_loads"] - out["work_prescribed"] - out["work_constraints"] \
+        - out["work_water"] \
         + out["dissipated"] + out["dissipated_friction"] + out["dissipated_contact"] \
         + out["dissipated_springs"] + out["dissipated_impact"]
     return out

@@ -16,6 +16,7 @@ import shapely
 
 from .constraints.checks import redundant_constraints, unheld_massless_blocks
 from .constraints.data import BoltSpec, ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
+from .constraints.water import UNIT_WEIGHT, WaterTable, crack_facets, water_table
 from .history import HistoryError, MotionHistory, TimeHistory
 from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon, overlapping_pairs
 from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_polyhedra, normalize_polyhedron,
@@ -184,6 +185,7 @@ class ModelArrays:
     links: ConstraintArrays  # hinges, springs, prescribed motion
     mesh: PolyhedronMesh | None = None  # the faces of 3D blocks (None in 2D)
     face_joint: np.ndarray | None = None  # (nf,) joint material of each mesh face, -1 = by materials (3D)
+    water: WaterTable | None = None  # the water table (docs/water.md); change it with dataclasses.replace
 
     @property
     def n_blocks(self) -> int:
@@ -235,6 +237,7 @@ class Model:
     base_acceleration: MotionHistory | None = None
     bolts: list[BoltSpec] = field(default_factory=list)
     allow_overlap: bool = False  # True: blocks that overlap at the start are accepted (their contacts push them apart)
+    water: WaterTable | None = None  # the water in the joints (set_water, docs/water.md)
 
     # -- building ---------------------------------------------------------
     def add_material(self, name: str, material: Material) -> str:
@@ -586,6 +589,20 @@ class Model:
         except HistoryError as exc:
             raise ModelError(f"base acceleration: {exc}") from exc
 
+    def set_water(self, level: float | None = None, point: Sequence[float] | None = None,
+                  normal: Sequence[float] | None = None, unit_weight: float = UNIT_WEIGHT,
+                  cracks: Sequence[tuple[Sequence[float], Sequence[float], float]] = ()) -> WaterTable:
+        """Water in the joints (docs/water.md): the phreatic surface at the horizontal ``level`` (m, elevation
+        against gravity: y in 2D, z in 3D) or the plane through ``point`` with the upward ``normal``;
+        ``unit_weight`` γ_w (N/m³); ``cracks``: tension cracks as (point, normal, depth), the plane of the crack
+        and the depth (m) of the water standing in it above its bottom. Set the gravity first.
+        """
+        try:
+            self.water = water_table(self.gravity, level, point, normal, unit_weight, cracks)
+        except ValueError as exc:
+            raise ModelError(f"water.{exc}") from None
+        return self.water
+
     def _check_overlaps(self, vertices: np.ndarray, block_ptr: np.ndarray) -> None:
         """ModelError naming the blocks that overlap at the start (more than 1e-6 of the smaller area)."""
         pairs, areas = overlapping_pairs(vertices, block_ptr)
@@ -634,6 +651,7 @@ class Model:
         if self.base_acceleration is not None:
             out.base_acceleration = self.base_acceleration.padded(SOLID.dim)
         out.bolts = [replace(b, point_a=at(b.point_a), point_b=at(b.point_b)) for b in self.bolts]
+        out.water = None if self.water is None else self.water.padded()
         return out
 
     def add_box(self, lo: Sequence[float], hi: Sequence[float], material: str, **options: object) -> int:
@@ -825,9 +843,24 @@ class Model:
             links=links,
             mesh=mesh,
             face_joint=face_joint,
+            water=self.water,
         )
         self._check_held(arrays)
+        self._check_water(arrays)
         return arrays
+
+    def _check_water(self, arrays: ModelArrays) -> None:
+        """ModelError naming a water table of another dimension or a crack on which no moving block's face lies."""
+        if self.water is None:
+            return
+        if len(self.water.point) != arrays.vertices.shape[1]:
+            raise ModelError(f"water: the table is {len(self.water.point)}D, the model "
+                             f"{arrays.vertices.shape[1]}D (set the gravity before the water)")
+        for i, crack in enumerate(self.water.cracks):
+            try:
+                crack_facets(arrays, crack)
+            except ValueError as exc:
+                raise ModelError(f"water.cracks[{i}]: {exc}") from None
 
     def _check_held(self, arrays: ModelArrays) -> None:
         """ModelError naming redundant constraints and moving blocks without mass that nothing holds."""

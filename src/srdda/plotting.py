@@ -124,6 +124,7 @@ ENERGY_WORDS = {"kinetic": "kinetic energy", "gravity": "gravitational energy (e
                 "dissipated_contact": "energy taken out by the contact penalty",
                 "dissipated_springs": "energy taken out by the springs' step force",
                 "dissipated_impact": "energy taken out by impacts with a restitution",
+                "work_water": "work of the water pressure",
                 "balance": "energy balance E − W_in + D"}
 _COMPONENT_WORDS = {"vx": "velocity x", "vy": "velocity y", "vz": "velocity z", "omega": "angular velocity ω",
                     "omega_x": "angular velocity ωx", "omega_y": "angular velocity ωy",
@@ -648,6 +649,7 @@ LEDGER_PANELS = (
     ("work_loads", "work of loads and base acceleration (in)"),
     ("work_prescribed", "work of prescribed motion (in)"),
     ("work_constraints", "work of hinge forces (in)"),
+    ("work_water", "work of the water pressure (in)"),
     ("dissipated", "dissipated by dashpots"),
     ("dissipated_friction", "dissipated by friction"),
     ("dissipated_contact", "taken out by the contact penalty\n(impacts, springs released stretched)"),

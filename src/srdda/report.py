@@ -133,6 +133,8 @@ LEDGER_SENTENCES = {
                           "stored energy).",
     "dissipated_impact": "Cumulative energy the impacts on joints with a restitution e_n took out: their dashpot, "
                          "(1 − e_n²) of each impact's energy.",
+    "work_water": "Cumulative work of the water pressure in the joints and tension cracks (docs/water.md): "
+                  "positive while the uplift pushes the blocks apart or down the slope.",
     "error": "Balance error E − E₀ − W_in + D: the time scheme's and the linearisation's own loss or gain; "
              "zero for an exact ledger.",
 }

@@ -45,13 +45,12 @@ from ..geometry.jointsets3d import plane_normal
 from ..geometry.polyhedron import box
 from ..model import JointMaterial, Material, Model
 
-__all__ = ["G", "GAMMA_WATER", "HoekBrayAngles", "hoek_bray_wedge_angles", "hoek_bray_wedge_factor_of_safety",
+__all__ = ["G", "HoekBrayAngles", "hoek_bray_wedge_angles", "hoek_bray_wedge_factor_of_safety",
            "wedge_vertices", "SLIDE_TOPPLE_CASES", "SlideToppleCase", "WedgeSolution", "block_on_incline_model",
            "incline_acceleration", "slide_topple_mode", "slide_topple_model", "toppling_angular_acceleration",
            "wedge_friction_for", "wedge_model", "wedge_solution", "WEDGE_PLANES", "WEDGE_FACE"]
 
 G = 9.81  # m/s²
-GAMMA_WATER = 9810.0  # N/m³, unit weight of water
 ROCK = Material(density=2600.0, young=10e9, poisson=0.25)
 
 

@@ -1,5 +1,6 @@
 """Constraints and driven boundaries: fixed points, point loads, springs with dashpots, hinges and pins by
-Lagrange multipliers, prescribed motion (penalty or multipliers), base acceleration, rock bolts.
+Lagrange multipliers, prescribed motion (penalty or multipliers), base acceleration, rock bolts, the water in
+the joints and tension cracks (:mod:`.water`).
 
 ``point_terms(arrays, penalty)`` gives the step terms (:class:`srdda.term.Term`)
 a model's points need. See docs/constraints.md.
@@ -16,17 +17,19 @@ from .lagrange import LagrangeTerm, hinge_forces
 from .loads import PointLoadTerm
 from .prescribed import BaseAccelerationTerm, PrescribedPenaltyTerm
 from .springs import SpringTerm
+from .water import WaterCrackTerm
 
 if TYPE_CHECKING:
     from ..model import ModelArrays
 
 __all__ = ["ConstraintArrays", "HingeSpec", "PrescribedSpec", "SpringSpec", "BoltSpec", "BoltTerm", "bolt_forces", "MotionHistory", "HistoryError",
-           "LagrangeTerm", "SpringTerm", "PointLoadTerm", "PrescribedPenaltyTerm", "BaseAccelerationTerm",
+           "LagrangeTerm", "SpringTerm", "PointLoadTerm", "WaterCrackTerm", "PrescribedPenaltyTerm", "BaseAccelerationTerm",
            "hinge_forces", "point_terms"]
 
 
 def point_terms(arrays: ModelArrays, penalty: float) -> list[Term]:
-    """The terms of the model's fixed points, springs, loads, hinges, driven points, base acceleration and bolts."""
+    """The terms of the model's fixed points, springs, loads, hinges, driven points, base acceleration, bolts and
+    the water in its tension cracks."""
     links = arrays.links
     terms: list[Term] = []
     if len(arrays.fixed_rows) or len(arrays.spring_rows_a) or len(links.spring_rows_a):
@@ -41,4 +44,6 @@ def point_terms(arrays: ModelArrays, penalty: float) -> list[Term]:
         terms.append(BaseAccelerationTerm(links))
     if links.n_bolts:
         terms.append(BoltTerm(links))
+    if arrays.water is not None and arrays.water.cracks:
+        terms.append(WaterCrackTerm(arrays))
     return terms

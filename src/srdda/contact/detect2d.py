@@ -26,8 +26,10 @@ __all__ = ["Detector2D", "edge_shares"]
 
 
 def edge_shares(vertices: np.ndarray, next_vertex: np.ndarray, previous_vertex: np.ndarray, vertex: np.ndarray,
-                tangent: np.ndarray, cos_parallel: float) -> tuple[np.ndarray, np.ndarray]:
-    """(bond, tributary) lengths of contacts at ``vertex`` against edges along ``tangent``.
+                tangent: np.ndarray, cos_parallel: float
+                ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """(bond, tributary) lengths of contacts at ``vertex`` against edges along ``tangent``, and the edges that
+    make up the bonds (the record's ``bond_faces``: contact, edge by its start vertex, share ½).
 
     The bond, over which cohesion and tensile strength act, is half of each
     edge at the vertex that lies along the contacted edge (to within the
@@ -38,13 +40,18 @@ def edge_shares(vertices: np.ndarray, next_vertex: np.ndarray, previous_vertex: 
     """
     bond = np.zeros(len(vertex))
     shortest = np.full(len(vertex), np.inf)
-    for other in (next_vertex[vertex], previous_vertex[vertex]):
+    owners, edges = [], []
+    for other, edge in ((next_vertex[vertex], vertex), (previous_vertex[vertex], previous_vertex[vertex])):
         d = vertices[other] - vertices[vertex]
         length = np.hypot(d[:, 0], d[:, 1])
         along = np.abs(np.einsum("nk,nk->n", d, tangent)) >= cos_parallel * length
         bond += np.where(along, 0.5 * length, 0.0)
         shortest = np.minimum(shortest, 0.5 * length)
-    return bond, np.where(bond > 0.0, bond, shortest)
+        owners.append(np.flatnonzero(along))
+        edges.append(edge[along])
+    owner = np.concatenate(owners)
+    return bond, np.where(bond > 0.0, bond, shortest), (owner, np.concatenate(edges).astype(np.int64),
+                                                        np.full(len(owner), 0.5))
 
 
 class Detector2D:
@@ -82,12 +89,13 @@ class Detector2D:
         named = arr.edge_joint[edge]
         joint = np.where(named >= 0, named, arr.joint_by_materials[arr.block_material[block_a],
                                                                    arr.block_material[block_b]])
-        bond, tributary = edge_shares(vertices, arr.next_vertex, self.previous_vertex, vertex, tangent,
-                                      self.cos_parallel)
+        bond, tributary, bond_faces = edge_shares(vertices, arr.next_vertex, self.previous_vertex, vertex, tangent,
+                                                  self.cos_parallel)
         n = len(found)
         return ContactRecord(
             features=found, key=vertex.astype(np.int64) * len(vertices) + edge.astype(np.int64),
             block_a=block_a, block_b=block_b, point_a=p, point_b=p0 + ratio[:, None] * d, normal=normal,
             frame=tangent[:, None, :], gap=np.einsum("nk,nk->n", rel, normal), start_reference=parameter[:, None],
             anchor_a=p, axes_a=np.zeros((n, 1, vertices.shape[1])), anchor_b=p0, axes_b=d[:, None, :],
-            joint=joint.astype(np.int64), bond=bond, tributary=tributary, draggable=np.zeros(n, dtype=bool))
+            joint=joint.astype(np.int64), bond=bond, tributary=tributary, draggable=np.zeros(n, dtype=bool),
+            bond_faces=bond_faces)

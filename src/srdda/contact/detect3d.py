@@ -208,8 +208,9 @@ class Detector3D:
         if len(found) == 0:
             return None
         record = contact_record_3d(vertices, mesh, topo, surface, found, self.key_size)
-        bond, tributary = self.face_shares(found, surface, record.normal)
-        return replace(record, joint=self.joint_index(found, record), bond=bond, tributary=tributary)
+        bond, tributary, bond_faces = self.face_shares(found, surface, record.normal)
+        return replace(record, joint=self.joint_index(found, record), bond=bond, tributary=tributary,
+                       bond_faces=bond_faces)
 
     def joint_index(self, found: np.ndarray, record: ContactRecord) -> np.ndarray:
         """Row of the joint table of every contact: the contacted face's joint material.
@@ -235,9 +236,10 @@ class Detector3D:
             named[ee] = np.where(on_b >= 0, on_b, np.max(face_joint[faces_a], axis=1))
         return np.where(named >= 0, named, by_materials)
 
-    def face_shares(self, found: np.ndarray, surface: SurfaceGeometry,
-                    normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(bond, tributary) areas of the contacts.
+    def face_shares(self, found: np.ndarray, surface: SurfaceGeometry, normal: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """(bond, tributary) areas of the contacts, and the faces that make up the bonds (the record's
+        ``bond_faces``: contact, mesh face, share 1 / its vertex count).
 
         The bond, over which cohesion and tensile strength act: each face of a
         at a vertex-face contact's vertex whose normal is opposite the
@@ -257,7 +259,8 @@ class Detector3D:
         owner = np.repeat(np.arange(len(found)), counts)
         corner = topo.vertex_corner[np.repeat(start - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
         face = topo.corner_face[corner]
-        share = surface.face_area[face] / np.diff(self.mesh.face_ptr)[face]
+        count = np.diff(self.mesh.face_ptr)[face]
+        share = surface.face_area[face] / count
         facing = np.einsum("ni,ni->n", surface.face_normal[face], normal[owner]) <= -self.cos_parallel
         bond = np.bincount(owner, weights=np.where(facing, share, 0.0), minlength=len(found))
         smallest = np.full(len(found), np.inf)
@@ -266,4 +269,5 @@ class Detector3D:
             edges = np.concatenate([topo.edge_faces[found[~vf, 1]], topo.edge_faces[found[~vf, 2]]], axis=1)
             faces = surface.face_area[edges] / np.diff(self.mesh.face_ptr)[edges]
             smallest[~vf] = np.min(faces, axis=1)
-        return bond, np.where(bond > 0.0, bond, smallest)
+        return bond, np.where(bond > 0.0, bond, smallest), (owner[facing], face[facing].astype(np.int64),
+                                                             1.0 / count[facing])

@@ -154,6 +154,7 @@ class NewtonContactStep(ContactStep):
         c_p = ctx.coeffs.c_p
         self._c_p = c_p
         springs.add_to(system, self.normal_on, self.stick, c_p, by_changes=ctx.theta is None)
+        self.add_water(system, springs)
         capped = np.flatnonzero(~self.normal_on & (self.response.tension > 0.0))
         if len(capped):  # bonded contacts pulled to their tensile strength: the constant force T along n
             pull = self.response.tension[capped]

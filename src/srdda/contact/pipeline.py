@@ -25,6 +25,8 @@ import numpy as np
 from numba import njit
 
 from ..assembly.system import BlockSystem, scatter_add
+from ..constraints.water import contact_water
+from ..geometry.facets import boundary_simplices
 from ..model import ModelArrays
 from ..term import LEDGER, StepContext, StepCut, Term
 from .candidates import pair_keys
@@ -163,6 +165,8 @@ class ContactStep:
         self._force_limit: np.ndarray = np.zeros(len(state))  # N, per contact: a change below needs no solve
         # block pairs of the last solve's state changes (for the message of a cut step)
         self.unsettled_pairs = np.column_stack([record.block_a[:0], record.block_b[:0]])
+        # the water force of each contact (N, pushing its blocks apart along n: constraints.water), None: dry
+        self.water: np.ndarray | None = None
         # contacts whose joint has a restitution and carries no tension: the impact law instead of Shi's
         # normal spring (law.impact_force); None where there are none
         self.impacts: ImpactSprings | None = None
@@ -230,6 +234,7 @@ class ContactStep:
         # by changes while the shapes stay those of the step (Shi's T at t, not the secant pass's)
         springs.add_to(system, self._shi_normal(self.state != OPEN), self.state == LOCKED, ctx.coeffs.c_p,
                        by_changes=ctx.theta is None)
+        self.add_water(system, springs)
         if self.impacts is not None:
             i = self.impacts.index
             self.impacts.add_to(system, springs.normal_a[i], springs.normal_b[i], ctx)
@@ -251,6 +256,20 @@ class ContactStep:
             force = np.einsum("nk,nki->ni", applied, r.frame[sliding])
             scatter_add(system.rhs, a[sliding], np.einsum("nki,nk->ni", ta[sliding], force))
             scatter_add(system.rhs, b[sliding], -np.einsum("nki,nk->ni", tb[sliding], force))
+
+    def add_water(self, system: BlockSystem, springs: ContactSprings) -> None:
+        """The water force W of each contact along n on a, −n on b, through the springs' rows n·T."""
+        if self.water is None:
+            return
+        r, w = self.record, self.water[:, None]
+        scatter_add(system.rhs, r.block_a, w * springs.normal_a)
+        scatter_add(system.rhs, r.block_b, -w * springs.normal_b)
+
+    def water_work(self, dd: np.ndarray) -> float:
+        """Work (J, per m in 2D) of the water forces over the increments ``dd``: W × the gaps' increments."""
+        if self.water is None or self._shapes is None:
+            return 0.0
+        return float(np.dot(self.water, self._increments(dd)[0]))
 
     def _shi_normal(self, closed: np.ndarray) -> np.ndarray:
         """Of contacts ``closed``, those with Shi's normal spring: all but the impact springs'."""
@@ -546,6 +565,10 @@ class ContactTerm(Term):
     def begin(self, ctx: StepContext) -> None:
         state = ctx.state
         self.step = self.model.prepare(state.vertices, state.contacts, state.step == 0)
+        water = ctx.arrays.water
+        if self.step is not None and water is not None:
+            self.step.water = contact_water(water, self.step.record, self.model.params.distance, state.vertices,
+                                            boundary_simplices(ctx.arrays))
 
     @property
     def at_points(self) -> bool:
@@ -618,6 +641,7 @@ class ContactTerm(Term):
         out[LEDGER.index("dissipated_friction")] = -friction
         out[LEDGER.index("dissipated_contact")] = -springs - stored - impact
         out[LEDGER.index("dissipated_impact")] = impact
+        out[LEDGER.index("work_water")] = self.step.water_work(dd)
         return out
 
 

@@ -52,6 +52,9 @@ class ContactRecord:
     bond: np.ndarray  # (n,) length (2D) or area (3D) over which cohesion and tensile strength act
     tributary: np.ndarray  # (n,) length (2D) or area (3D) of joint a contact stands for (stiffness per area)
     draggable: np.ndarray  # (n,) bool: a sliding contact's spring may be carried at its strength (3D vertex-face)
+    # the faces of a that make up each bond: (contact (m,), face (m,): 2D the edge's start vertex, 3D the mesh
+    # face, share (m,): 1 / the face's vertex count), so bond = Σ share × face size (the water, docs/water.md)
+    bond_faces: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def __len__(self) -> int:
         return len(self.key)

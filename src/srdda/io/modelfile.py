@@ -146,6 +146,9 @@ def _build(spec: ModelFile, source: str, base_dir: Path) -> tuple[Model, RunSett
         _add_links(model, spec, names, n, where)
         if spec.base_acceleration is not None:
             model.set_base_acceleration(_base_acceleration(spec.base_acceleration, model.dim, base_dir, source))
+        if spec.water is not None:
+            w = spec.water
+            model.set_water(w.level, w.point, w.normal, w.unit_weight, [(c.point, c.normal, c.depth) for c in w.cracks])
     except ModelError as exc:
         raise ModelFileError(f"{source}: {exc}") from None
     return model, spec.run
@@ -429,6 +432,11 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
     if model.measured_points:
         out["measured_points"] = [{"at": _pt(p), "block": i} for i, p in model.measured_points]
     out.update(_links_dict(model))
+    if model.water is not None:
+        w = model.water
+        out["water"] = {"point": list(w.point), "normal": list(w.normal), "unit_weight": w.unit_weight,
+                        "cracks": [{"point": list(c.point), "normal": list(c.normal), "depth": c.depth}
+                                   for c in w.cracks]}
     return out
 
 

@@ -16,7 +16,7 @@ from ..units import reject_boolean, to_si
 __all__ = ["ModelFile", "MaterialSection", "BlockSection", "PointRef", "FixedPointSection",
            "PointLoadSection", "PointSpringSection", "MeasuredPointSection", "JointMaterialSection",
            "HingeSection", "PinSection", "SpringSection", "HistorySection", "PrescribedMotionSection",
-           "BaseAccelerationSection", "BoltSection",
+           "BaseAccelerationSection", "BoltSection", "WaterSection", "CrackSection",
            "CuttingSection", "CutDomainSection", "JointSetSection", "JointSection"]
 
 
@@ -182,6 +182,26 @@ class BoltSection(_Strict):
     name: str = ""
 
 
+class CrackSection(_Strict):
+    """A tension crack: the plane (2D: line) through ``point`` with ``normal``, water ``depth`` m deep above its
+    bottom (srdda.constraints.water)."""
+
+    point: Point
+    normal: Point
+    depth: Length = Field(ge=0)
+
+
+class WaterSection(_Strict):
+    """The water in the joints (docs/water.md): a horizontal ``level``, or a plane through ``point`` with the
+    upward ``normal``; the unit weight γ_w (N/m³) and the tension cracks."""
+
+    level: Length | None = None  # m, elevation against gravity (y in 2D, z in 3D)
+    point: Point | None = None
+    normal: Point | None = None
+    unit_weight: float = Field(9810.0, gt=0)  # N/m³
+    cracks: list[CrackSection] = []
+
+
 Point3 = tuple[float, float, float]
 
 
@@ -255,3 +275,4 @@ class ModelFile(_Strict):
     prescribed_motion: list[PrescribedMotionSection] = []
     base_acceleration: BaseAccelerationSection | None = None
     bolts: list[BoltSection] = []
+    water: WaterSection | None = None

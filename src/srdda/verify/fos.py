@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cases.plane2d import PLANE_FAILURE, plane_failure_model
+from ..cases.plane_failure import PLANE_FAILURE, plane_failure_model
 from ..cases.slope3d import (WEDGE_PLANES, hoek_bray_wedge_angles, hoek_bray_wedge_factor_of_safety, wedge_friction_for,
                              wedge_model, wedge_solution)
 from ..fos import FactorOfSafety, factor_of_safety, try_factor
@@ -37,7 +37,7 @@ def _margin_rows(name: str, model: Model, settings: RunSettings, fos: FactorOfSa
 
 
 # ---------------------------------------------------------------------------------------------
-# fos-plane-2d: Hoek & Bray's plane failure (srdda.cases.plane2d: a 12 m slope, face 60°, sliding plane
+# fos-plane-2d: Hoek & Bray's plane failure (srdda.cases.plane_failure: a 12 m slope, face 60°, sliding plane
 # 30° daylighting at the toe, a dry tension crack where the weight's line of action meets the middle of
 # the plane, c = 20 kPa, φ = 25°: FS = 1.2092). The block is 100 × stiffer than the contacts (E = 1e12 Pa,
 # k_n = 1e10 N/m): the bond is lost where a contact slides, so an elastic block whose strain loads one end

@@ -128,6 +128,10 @@ EXPECTED_SECONDS: dict[str, tuple[float, float]] = {
     "impact-restitution-3d": (7.4, 26.4),
     "fos-plane-2d": (4.1, 4.1),
     "fos-wedge-3d": (9.7, 9.7),
+    "water-plane-2d": (10.0, 10.0),  # measured 2026-11-26 on the branch that added them (4 agents on 2 cores)
+    "water-plane-3d": (21.8, 21.8),
+    "water-uplift-2d": (1.4, 1.4),
+    "water-uplift-3d": (1.2, 1.2),
 }
 
 
