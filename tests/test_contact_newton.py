@@ -2,10 +2,13 @@
 conic solver in tests/test_contact_solve_reference.py)."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from srdda import RunSettings, run
+from srdda.bench.models import jointed_slope
 from srdda.verify.cases2d import INCLINE_ACCELERATION, INCLINE_G, INCLINE_PENALTY, INCLINE_PSI, incline_model_2d
 
 STEPS = 300  # of 1 ms: the block slides 0.22 m, far beyond its ~1e-6 m settling into the springs
@@ -24,3 +27,14 @@ def test_sliding_on_an_incline_has_the_closed_form_acceleration(method: str, phi
     exact = INCLINE_G * (np.sin(INCLINE_PSI) - np.cos(INCLINE_PSI) * np.tan(np.radians(phi)))
     # the tolerance of srdda verify's incline-2d: the settling into the springs, 1e-6 m against 0.2 m of travel
     assert 2.0 * float(np.linalg.norm(c[-1] - c[0])) / t**2 == pytest.approx(exact, rel=INCLINE_ACCELERATION)
+
+
+def test_a_step_that_once_cycled_converges_without_a_cut() -> None:
+    # slope_b's sixth step: a damped step's model held the springs of its full step, not the iterate's; the
+    # next direction climbed Π, was taken whole, and the iterates repeated with period 3 up to the cap (a cut).
+    # Never climbing, it converges in 35 solves (docs/dev/contact-solve.md)
+    model, settings = jointed_slope("b")
+    res = run(model, replace(settings, n_steps=6, contact_solver="newton", newton_max_iterations=60),
+              keep_history=False)
+    assert res.completed, res.status
+    assert int(res.final_state.cuts.sum()) == 0

@@ -116,6 +116,8 @@ class RunSettings:
     contact_angle_tolerance: Annotated[Degrees, Field(ge=0, lt=45)] = 3.0  # Shi's angle criterion
     penetration_fraction: Annotated[Ratio, Field(gt=0)] = 0.4  # a step deeper than this × d0 is cut
     open_close_max_iterations: Annotated[int, Field(ge=1)] = 20  # state-changing solves before a cut
+    # Newton's solves of a step before it is cut: a safeguard only (its iteration converges; docs/contacts.md)
+    newton_max_iterations: Annotated[int, Field(ge=1)] = 100
     friction_tolerance: Annotated[Ratio, Field(gt=0)] = 1e-3  # relative settling of a sliding normal force
     open_close_tolerance: Annotated[Ratio, Field(ge=0, le=1e-3)] = 2e-7  # Shi's f0: open-close lengths / w0
     open_close_force_tolerance: Annotated[Ratio, Field(ge=0, le=1e-2)] = 1e-4  # negligible state change / block force

@@ -122,8 +122,9 @@ def default_terms(arrays: ModelArrays, settings: RunSettings, contact_law: Conta
         model = (NewtonContactModel if newton else ContactModel)(arrays, contact_parameters(arrays, settings, w0),
                                                                  contact_law)
         if np.any(model.can_touch):
-            terms.append((NewtonContactTerm if newton else ContactTerm)(model, settings.open_close_max_iterations,
-                                     settings.max_displacement_ratio * w0, settings.dt))
+            cap = settings.newton_max_iterations if newton else settings.open_close_max_iterations
+            terms.append((NewtonContactTerm if newton else ContactTerm)(model, cap, settings.max_displacement_ratio * w0,
+                                                                       settings.dt))
     return terms
 
 

@@ -28,7 +28,9 @@ Newton's method with a line search on Π reaches it:
   decreases Π enough (Armijo), else the backtracked one: Π(α) − Π(0) is
   (½α² − α)·δᵀHδ plus, contact by contact, the true springs' potentials
   less the linear model's, so a line search costs one block quadratic
-  form and passes over the contacts, no solve. A damped step stops short
+  form and passes over the contacts, no solve. A direction that climbs Π
+  is not taken (the iterate stays, the next model is its own states): so Π
+  falls at every step taken and the iterates cannot cycle. A damped step stops short
   of where a spring takes hold: the next model has the springs that act at
   the full step already;
 * N* of the yield forces stays fixed while the active set settles (each
@@ -218,7 +220,8 @@ class NewtonContactStep(ContactStep):
         alpha = 1.0
         true0, model0 = self._potentials(gap0, shear0, False), self._potentials(gap0, shear0, True)
         # below the rounding of Π's contact parts no line search can tell values apart: the full step is taken
-        resolvable = -slope0 > ROUNDING * (abs(true0) + abs(model0)) / c_p
+        resolution = ROUNDING * (abs(true0) + abs(model0)) / c_p
+        resolvable, resolvable_rise = -slope0 > resolution, slope0 > resolution
         if slope0 < 0.0 and resolvable:  # a descent direction (not so, at most, the first solve's predicted states)
             base = true0 - model0
 
@@ -241,7 +244,12 @@ class NewtonContactStep(ContactStep):
                 beyond = min(1.0, kink * (1.0 + KINK_PASS))
                 if alpha < beyond < 1.0 and rise(beyond) <= ARMIJO * beyond * slope0:
                     alpha = beyond
-        if alpha < 1.0:
+        elif slope0 > 0.0 and resolvable_rise and self.step_lengths:
+            # uphill: the model held springs that the iterate does not have (those of a damped step's full
+            # step). Taken, the step would raise Π and the iteration can cycle; the iterate stays and the next
+            # model is its own states, whose Newton direction descends (Π is convex)
+            alpha = 0.0
+        if 0.0 < alpha < 1.0:
             # a damped step stops short of where a spring takes hold: the next model has the springs that act
             # at the full step already (a contact closed, a shear spring sticking), or it would stop short again
             gap1, shear1 = along(1.0)
