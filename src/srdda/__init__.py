@@ -21,6 +21,8 @@ from .model import JointMaterial, Load, Material, Model, ModelError
 from .results import Result
 from .settings import RunSettings
 from .simulation import run
+from .staging import Stage
+from .equilibrium import Settled, settle
 from .state import State
 from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume
@@ -40,5 +42,5 @@ __all__ = [
     "BlockCut", "CuttingError", "JointSet", "add_cut_blocks", "circular_opening", "cut_blocks", "joint_traces",
     "polygonal_opening",
     "JointPlanes", "JointSet3D", "PolyhedralCut", "add_cut_polyhedra", "convex_hull_polyhedron", "cut_polyhedra",
-    "joint_planes",
+    "joint_planes", "Stage", "Settled", "settle",
 ]

@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import shapely
@@ -24,6 +24,9 @@ from .kinematics.blocktype import PLANE, SOLID, BlockType, block_type_of_dimensi
 from .kinematics.shape3d import elasticity_matrix_3d
 from .kinematics.update2d import rotate_symmetric_components
 from .kinematics.update3d import rotate_symmetric_components_3d
+
+if TYPE_CHECKING:
+    from .staging import Stage, StagePlan
 
 __all__ = ["JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
 
@@ -184,6 +187,9 @@ class ModelArrays:
     links: ConstraintArrays  # hinges, springs, prescribed motion
     mesh: PolyhedronMesh | None = None  # the faces of 3D blocks (None in 2D)
     face_joint: np.ndarray | None = None  # (nf,) joint material of each mesh face, -1 = by materials (3D)
+    block_removed: np.ndarray | None = None  # (nb,) bool: excavated by a stage (held, touches nothing); None: none
+    stages: tuple[StagePlan, ...] = ()  # the staged analysis (srdda.staging), resolved; () runs as one stage
+    base: ModelArrays | None = None  # of a stage's arrays: the model as built (what a results file stores)
 
     @property
     def n_blocks(self) -> int:
@@ -235,6 +241,7 @@ class Model:
     base_acceleration: MotionHistory | None = None
     bolts: list[BoltSpec] = field(default_factory=list)
     allow_overlap: bool = False  # True: blocks that overlap at the start are accepted (their contacts push them apart)
+    stages: list[Stage] = field(default_factory=list)  # the staged analysis (srdda.staging); [] runs as today
 
     # -- building ---------------------------------------------------------
     def add_material(self, name: str, material: Material) -> str:
@@ -586,6 +593,14 @@ class Model:
         except HistoryError as exc:
             raise ModelError(f"base acceleration: {exc}") from exc
 
+    def add_stage(self, stage: Stage) -> int:
+        """Append a stage of a staged analysis (:class:`srdda.staging.Stage`); returns its index.
+
+        Its names (blocks, bolts, materials) are checked when the model is compiled (:meth:`arrays`).
+        """
+        self.stages.append(stage)
+        return len(self.stages) - 1
+
     def _check_overlaps(self, vertices: np.ndarray, block_ptr: np.ndarray) -> None:
         """ModelError naming the blocks that overlap at the start (more than 1e-6 of the smaller area)."""
         pairs, areas = overlapping_pairs(vertices, block_ptr)
@@ -733,6 +748,8 @@ class Model:
     # -- compiling ---------------------------------------------------------
     def arrays(self) -> ModelArrays:
         """Flat arrays of the whole model for the time loop."""
+        from .staging import resolve_stages  # stages name blocks, bolts and materials of this model
+
         if not self.blocks:
             raise ModelError("the model has no blocks")
         bt = block_type_of_dimension(self.dim)
@@ -825,6 +842,7 @@ class Model:
             links=links,
             mesh=mesh,
             face_joint=face_joint,
+            stages=resolve_stages(self, self.stages) if self.stages else (),
         )
         self._check_held(arrays)
         return arrays

@@ -36,6 +36,12 @@ class Recorder(Protocol):
     def finish(self, status: str, state: State) -> None: ...
 
 
+def with_stage_row(rows: list[dict], index: int, entry: Mapping[str, object]) -> list[dict]:
+    """The stage table ``rows`` with the row of stage ``index`` (a stage began or ended): the rows of the stages
+    before it, then its own (a resumed run writes the rows of its stage and those after it again)."""
+    return [row for row in rows if row["index"] < index] + [{"index": index, **entry}]
+
+
 def measured_points(arrays: ModelArrays, state: State) -> tuple[np.ndarray, np.ndarray]:
     """Positions and velocities (n, dim) of the measured points."""
     mr = arrays.measured_rows
@@ -104,6 +110,11 @@ class Result:
     keep_vertices: bool = True  # False: no vertices history (a large model's memory)
     status: str = "running"
     final_state: State | None = None
+    stages: list[dict] = field(default_factory=list)  # a staged run's stage table (srdda.staging): one row a stage
+
+    def stage(self, index: int, entry: Mapping[str, object]) -> None:
+        """A stage of a staged run began or ended: its row of :attr:`stages`."""
+        self.stages = with_stage_row(self.stages, index, entry)
 
     def array(self, name: str) -> np.ndarray:
         """A history as one array (first axis = recorded step); ``energy`` has the columns :attr:`energy_names`."""
