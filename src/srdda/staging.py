@@ -37,7 +37,8 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import ValidationError
 
-from .equilibrium import RATIO_TOLERANCE, SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, unbalanced_force, without_ratio
+from .equilibrium import (RATIO_TOLERANCE, SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, unbalanced_force,
+                          without_ratio)
 from .history import HistoryError, TimeHistory
 from .kinematics.shape3d import elasticity_matrix_3d
 from .model import JointMaterial, JointTable, Material, Model, ModelArrays, ModelError, elasticity_matrix
@@ -447,7 +448,7 @@ class _Sinks:
         for sink in self.sinks:
             tell = getattr(sink, "stage", None)
             if tell is not None:
-                tell(index, entry)
+                tell(int(index), entry)  # a mark read from a checkpoint holds numpy integers
 
 
 def _entry(plan: StagePlan, mark: StageMark) -> dict[str, Any]:
