@@ -97,25 +97,10 @@ def _excavation(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
     return rows
 
 
-@case("stage-column-2d", dim=2, methods=("dda0", "dda1", "srdda"),
-      description="an equilibrium stage of a 10-block column: ratio < 1e-5, σv = ρ g h at every centroid")
-def stage_column_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
-    return _column("stage-column-2d", 2, methods)
-
-
-@case("stage-column-3d", dim=3, methods=("srdda",),
-      description="an equilibrium stage of a 10-cube column: ratio < 1e-5, σv = ρ g h at every centroid")
-def stage_column_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
-    return _column("stage-column-3d", 3, methods)
-
-
-@case("stage-excavation-2d", dim=2, methods=("dda0", "dda1", "srdda"),
-      description="equilibrium, then the block under another removed: it falls at g from the stage's start")
-def stage_excavation_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
-    return _excavation("stage-excavation-2d", 2, methods)
-
-
-@case("stage-excavation-3d", dim=3, methods=("srdda",),
-      description="equilibrium, then the cube under another removed: it falls at g from the stage's start")
-def stage_excavation_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
-    return _excavation("stage-excavation-3d", 3, methods)
+COLUMN = "an equilibrium stage of a 10-block column: ratio < 1e-5, σv = ρ g h at every centroid"
+EXCAVATION = "equilibrium, then the block under another removed: it falls at g from the stage's start"
+for _dim, _methods in ((2, ("dda0", "dda1", "srdda")), (3, ("srdda",))):
+    case(f"stage-column-{_dim}d", dim=_dim, methods=_methods, description=COLUMN)(
+        lambda methods, quick, dim=_dim: _column(f"stage-column-{dim}d", dim, methods))
+    case(f"stage-excavation-{_dim}d", dim=_dim, methods=_methods, description=EXCAVATION)(
+        lambda methods, quick, dim=_dim: _excavation(f"stage-excavation-{dim}d", dim, methods))
