@@ -9,9 +9,9 @@ the last recorded step, so a long run streamed to a file does not grow in memory
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -40,6 +40,18 @@ def with_stage_row(rows: list[dict], index: int, entry: Mapping[str, object]) ->
     """The stage table ``rows`` with the row of stage ``index`` (a stage began or ended): the rows of the stages
     before it, then its own (a resumed run writes the rows of its stage and those after it again)."""
     return [row for row in rows if row["index"] < index] + [{"index": index, **entry}]
+
+
+def reference_rows(steps: np.ndarray, stages: Sequence[Mapping[str, Any]]) -> np.ndarray:
+    """For every recorded row (its ``steps``), the row its displacements are measured from: the first row, or
+    the first row of the last stage begun by then that resets displacements (a staged run's ``stages`` table)."""
+    steps = np.asarray(steps)
+    out = np.zeros(len(steps), dtype=np.int64)
+    for row in stages:
+        at = np.flatnonzero(steps == row["first_step"])
+        if row["reset_displacements"] and len(at):
+            out[steps >= row["first_step"]] = at[0]
+    return out
 
 
 def measured_points(arrays: ModelArrays, state: State) -> tuple[np.ndarray, np.ndarray]:
