@@ -253,3 +253,11 @@ def test_the_in_memory_run_and_the_file_agree_and_a_removed_block_stays_put() ->
     assert res.stages[1]["removed_blocks"] == [1] and res.stages[1]["reset_displacements"]
     # the dig stage starts at rest (reset_displacements): the blocks above fall from rest at g at first
     assert np.all(res.final_state.velocity[1] == 0.0)
+
+
+def test_the_2d_stage_verification_cases_pass() -> None:
+    # the issue's acceptance, as `srdda verify` runs it (the rows' tolerances are in src/srdda/verify/cases_stages.py)
+    from srdda.verify import run_case
+
+    rows = run_case("stage-column-2d", methods=("srdda",)) + run_case("stage-excavation-2d", methods=("srdda",))
+    assert len(rows) == 3 and all(r["passed"] for r in rows), [(r["quantity"], r["rel_error"]) for r in rows]
