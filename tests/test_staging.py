@@ -261,3 +261,11 @@ def test_the_2d_stage_verification_cases_pass() -> None:
 
     rows = run_case("stage-column-2d", methods=("srdda",)) + run_case("stage-excavation-2d", methods=("srdda",))
     assert len(rows) == 3 and all(r["passed"] for r in rows), [(r["quantity"], r["rel_error"]) for r in rows]
+
+
+def test_a_staged_model_is_written_back_to_a_model_file_and_read_the_same() -> None:
+    from srdda.io.modelfile import model_to_dict
+
+    model = _staged_model()
+    again, _ = model_from_dict(model_to_dict(model, STAGED), "written")
+    assert again.arrays().stages == model.arrays().stages

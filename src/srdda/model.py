@@ -649,6 +649,8 @@ class Model:
         if self.base_acceleration is not None:
             out.base_acceleration = self.base_acceleration.padded(SOLID.dim)
         out.bolts = [replace(b, point_a=at(b.point_a), point_b=at(b.point_b)) for b in self.bolts]
+        out.stages = [replace(s, base_acceleration=None if s.base_acceleration is None
+                              else s.base_acceleration.padded(SOLID.dim)) for s in self.stages]
         return out
 
     def add_box(self, lo: Sequence[float], hi: Sequence[float], material: str, **options: object) -> int:

@@ -452,6 +452,27 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
     if model.measured_points:
         out["measured_points"] = [{"at": _pt(p), "block": i} for i, p in model.measured_points]
     out.update(_links_dict(model))
+    if model.stages:
+        out["stages"] = [_stage_dict(stage) for stage in model.stages]
+    return out
+
+
+def _stage_dict(stage: Stage) -> dict[str, Any]:
+    """A ``[[stages]]`` table of a stage (what it leaves at its default is left out)."""
+    out: dict[str, Any] = {"name": stage.name, "kind": stage.kind}
+    for key in ("remove_blocks", "install_bolts", "fix_blocks", "free_blocks"):
+        if getattr(stage, key):
+            out[key] = list(getattr(stage, key))
+    if stage.base_acceleration is not None:
+        out["base_acceleration"] = _history_dict(stage.base_acceleration, f"stage {stage.name!r}'s base acceleration")
+    if stage.materials:
+        out["materials"] = {n: dataclasses.asdict(m) for n, m in stage.materials.items()}
+    if stage.joint_materials:
+        out["joint_materials"] = {n: {k: v for k, v in dataclasses.asdict(j).items() if v is not None}
+                                  for n, j in stage.joint_materials.items()}
+    if stage.run:
+        out["run"] = {("steps" if k == "n_steps" else k): v for k, v in stage.run.items()}
+    out.update(tolerance=stage.tolerance, max_steps=stage.max_steps, reset_displacements=stage.reset_displacements)
     return out
 
 
