@@ -269,3 +269,14 @@ def test_a_staged_model_is_written_back_to_a_model_file_and_read_the_same() -> N
     model = _staged_model()
     again, _ = model_from_dict(model_to_dict(model, STAGED), "written")
     assert again.arrays().stages == model.arrays().stages
+
+
+def test_stop_ends_a_staged_run_in_a_dynamic_stage() -> None:
+    # the ensembles' stop rule: asked after every step of the dynamic stages, it ends the whole run there
+    m = _rock()
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock", name="a")
+    m.add_stage(srdda.Stage("one", run={"n_steps": 5}))
+    m.add_stage(srdda.Stage("two", run={"n_steps": 5}))
+    m.add_stage(srdda.Stage("three", run={"n_steps": 5}))
+    res = srdda.run(m, srdda.RunSettings(dt=1e-2, n_steps=1), stop=lambda s: s.step == 7)
+    assert res.completed and res.final_state.step == 7 and [r["name"] for r in res.stages] == ["one", "two"]

@@ -44,17 +44,16 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     """Run ``model`` for ``settings.n_steps`` steps or to ``settings.end_time``; pure (no global state).
 
     A model with stages (``Model.stages``) runs them one after the other
-    (:func:`srdda.staging.run_stages`; ``stop`` is then not available); one
-    without runs as :func:`run_single` describes.
+    (:func:`srdda.staging.run_stages`; ``stop`` is asked in its dynamic
+    stages and ends the whole run); one without runs as :func:`run_single`
+    describes.
     """
     arrays = model.arrays() if isinstance(model, Model) else model
     if arrays.stages:
-        if stop is not None:
-            raise ValueError("stop cannot be given to a staged run: its stages say when each ends")
         from .staging import run_stages  # the stages run this module's run_single
 
         return run_stages(arrays, settings, progress, state, recorders, keep_history, keep_vertices, extra_terms,
-                          contact_law)
+                          contact_law, stop)
     return run_single(arrays, settings, progress, state, recorders, keep_history, stop, keep_vertices, extra_terms,
                       contact_law)
 

@@ -473,14 +473,15 @@ def _ended(entry: dict[str, Any], plan: StagePlan, state: State, status: str) ->
 def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[int], None] | None = None,
                state: State | None = None, recorders: Sequence[Recorder] = (), keep_history: bool = True,
                keep_vertices: bool = True, extra_terms: Sequence[Term] = (),
-               contact_law: ContactLaw | None = None) -> Result:
+               contact_law: ContactLaw | None = None, stop: Callable[[State], bool] | None = None) -> Result:
     """Run the stages of ``arrays`` (``arrays.stages``) one after the other from ``state`` (default: the initial
     state; a state of a staged run, e.g. a checkpoint, continues in the stage it carries).
 
     Arguments as :func:`srdda.simulation.run`; ``settings`` are the model's, each stage's changing them
     (:func:`stage_settings`). Returns one :class:`Result` of the whole run, ``result.stages`` the stage
     table (first step, start time, end, ratio reached). The run stops at the first stage that does not
-    complete (diverged, or Δt below its minimum), with that stage's status.
+    complete (diverged, or Δt below its minimum), with that stage's status. ``stop(state)``, called after
+    every accepted step of the dynamic stages, ends the whole run (completed) when it returns True.
     """
     from .simulation import run_single  # the run sits below the stages
 
@@ -492,6 +493,13 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
         state = initial_state(base, settings.resolved_method())
     mark = stage_mark(state)
     status = "completed"
+    stopped = False
+
+    def user_stop(s: State) -> bool:
+        nonlocal stopped
+        stopped = stop is not None and stop(s)
+        return stopped
+
     try:
         if mark is None:
             stage_arrays_, state = begin_stage(base, 0, state, initial_mark(base))
@@ -507,9 +515,10 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
             if plan.kind == "equilibrium" and reached(state, plan.tolerance):
                 stage_status = "completed"  # a resumed run whose checkpoint is this stage's last state
             else:
-                stop = (lambda s, tol=plan.tolerance: reached(s, tol)) if plan.kind == "equilibrium" else None
+                ends = (lambda s, tol=plan.tolerance: reached(s, tol)) if plan.kind == "equilibrium" \
+                    else (user_stop if stop is not None else None)
                 part = run_single(stage_arrays_, chosen, progress=progress, state=state, recorders=[sinks],
-                                  keep_history=False, stop=stop, keep_vertices=False,
+                                  keep_history=False, stop=ends, keep_vertices=False,
                                   extra_terms=[*extra_terms, UnbalancedForceTerm(), StageTerm(mark)],
                                   contact_law=contact_law)
                 assert part.final_state is not None
@@ -518,7 +527,7 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
             if stage_status != "completed":
                 status = f"stage {plan.name!r}: {stage_status}"
                 break
-            if mark.index + 1 == len(plans):
+            if stopped or mark.index + 1 == len(plans):
                 break
             stage_arrays_, state = begin_stage(base, mark.index + 1, state, mark)
             mark = stage_mark(state)
