@@ -280,3 +280,35 @@ def test_stop_ends_a_staged_run_in_a_dynamic_stage() -> None:
     m.add_stage(srdda.Stage("three", run={"n_steps": 5}))
     res = srdda.run(m, srdda.RunSettings(dt=1e-2, n_steps=1), stop=lambda s: s.step == 7)
     assert res.completed and res.final_state.step == 7 and [r["name"] for r in res.stages] == ["one", "two"]
+
+
+def test_plots_vtk_and_the_summary_show_the_stages(tmp_path: Path) -> None:
+    import meshio
+
+    from srdda import plotting
+    from srdda.io.vtk import write_vtu_series
+    from srdda.summary import format_summary, run_summary
+
+    path = tmp_path / "staged.h5"
+    res = srdda.run(_staged_model(), STAGED, recorders=[ResultsStore(path, STAGED, flush_every=4)])
+    stored = read_results(path)
+    summary = run_summary(stored, res.final_state)
+    assert [s["name"] for s in summary["stages"]] == ["gravity", "dig", "support"]
+    assert summary["stages"][0]["reached"] and summary["stages"][0]["ratio"] < 1e-5
+    lines = format_summary(summary)
+    assert lines[-3].startswith("stage gravity (equilibrium): steps 0-") and "(reached: tolerance 1e-05)" in lines[-3]
+    # the dig stage resets displacements: the largest displacement is measured from its start, so it is the
+    # fall since then, not the settling before
+    dig = stored.stages[1]
+    rows = np.flatnonzero(stored.step >= dig["first_step"])
+    fall = np.linalg.norm(stored.centroid[rows] - stored.centroid[rows[0]], axis=-1).max()
+    assert summary["largest_displacement"]["value"] == fall
+
+    fig = plotting.fig_time_series(stored, "velocity.vy")
+    assert [line.get_xdata()[0] for line in fig.axes[0].get_lines()[-3:]] == [s["start_time"] for s in stored.stages]
+    assert plotting.step_title(stored, -1).endswith("stage support")
+
+    write_vtu_series(stored, tmp_path / "vtk")
+    first = meshio.read(tmp_path / "vtk" / f"blocks_{dig['first_step']:07d}.vtu")
+    assert first.cell_data["removed"][0].tolist() == [0, 1, 0, 0] and set(first.cell_data["stage"][0]) == {1}
+    assert np.all(first.point_data["displacement"] == 0.0)  # measured from the dig stage's start

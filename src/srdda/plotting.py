@@ -37,6 +37,8 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
+from .results import removed_blocks  # noqa: E402
+
 __all__ = ["history", "quantity_names", "components", "block_values", "method_label", "plot_blocks",
            "fig_configuration",
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
@@ -330,7 +332,15 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     verts = res.array("vertices")
     index = index % len(verts)
     values = block_values(res, index, color)
-    coll = plot_blocks(ax, verts[index], res.block_ptr, values)
+    ptr = res.block_ptr
+    removed = removed_blocks(int(res.array("step")[index]), getattr(res, "stages", ()), len(ptr) - 1)
+    kept = np.flatnonzero(~removed)  # a block excavated by a stage: an empty dashed outline, under the others
+    sizes = np.diff(ptr)[kept]
+    coll = plot_blocks(ax, np.concatenate([verts[index][ptr[b]:ptr[b + 1]] for b in kept]),
+                       np.concatenate([[0], np.cumsum(sizes)]), None if values is None else values[kept])
+    if np.any(removed):
+        ax.add_collection(PolyCollection([verts[index][ptr[b]:ptr[b + 1]] for b in np.flatnonzero(removed)],
+                                         facecolor="none", edgecolor="0.5", linestyle="--", linewidth=0.6))
     if values is not None:
         fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.7)
     if trails:

@@ -54,6 +54,15 @@ def reference_rows(steps: np.ndarray, stages: Sequence[Mapping[str, Any]]) -> np
     return out
 
 
+def removed_blocks(step: int, stages: Sequence[Mapping[str, Any]], n_blocks: int) -> np.ndarray:
+    """The blocks (bool, n_blocks) the stages begun by ``step`` removed (a staged run's ``stages`` table)."""
+    removed = np.zeros(n_blocks, dtype=bool)
+    for row in stages:
+        if row["first_step"] <= step:
+            removed[row["removed_blocks"]] = True
+    return removed
+
+
 def measured_points(arrays: ModelArrays, state: State) -> tuple[np.ndarray, np.ndarray]:
     """Positions and velocities (n, dim) of the measured points."""
     mr = arrays.measured_rows

@@ -27,7 +27,7 @@ import numpy as np
 from ..contact.openclose import SLIDING
 from ..geometry.polyhedron import PolyhedronMesh
 from ..kinematics.blocktype import SOLID
-from ..results import reference_rows
+from ..results import reference_rows, removed_blocks
 from .results_reader import open_results
 from .results_store import StoredResult, read_results
 
@@ -243,9 +243,7 @@ def stage_fields(res: StoredResult, i: int) -> tuple[int, np.ndarray, np.ndarray
     the last stage begun that resets displacements; the initial ones without)."""
     step = int(res.step[i])
     begun = [row for row in res.stages if row["first_step"] <= step]
-    removed = np.zeros(len(res.block_names), dtype=bool)
-    for row in begun:
-        removed[row["removed_blocks"]] = True
+    removed = removed_blocks(step, res.stages, len(res.block_names))
     at = int(reference_rows(res.step, res.stages)[i])
     reference = np.asarray(res.initial_vertices if at == 0 else res.vertices[at], dtype=float)
     return (begun[-1]["index"] if begun else -1), removed, reference
