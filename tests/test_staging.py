@@ -19,7 +19,8 @@ from srdda.io.modelfile import ModelFileError, model_from_dict
 from srdda.io.results_store import ResultsStore, load_checkpoint, read_results, resume
 from srdda.model import ModelError
 from srdda.simulation import run_single
-from srdda.staging import begin_stage, initial_mark, stage_arrays, stage_mark
+from srdda.stages import initial_mark, stage_arrays, stage_mark
+from srdda.staging import begin_stage
 from srdda.verify.cases_stages import stacked_column
 
 G = 9.81

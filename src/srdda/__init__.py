@@ -21,7 +21,7 @@ from .model import JointMaterial, Load, Material, Model, ModelError
 from .results import Result
 from .settings import RunSettings
 from .simulation import run
-from .staging import Stage
+from .stages import Stage
 from .equilibrium import Settled, settle
 from .state import State
 from .solvers import available_solvers, get_solver

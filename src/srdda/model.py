@@ -26,7 +26,7 @@ from .kinematics.update2d import rotate_symmetric_components
 from .kinematics.update3d import rotate_symmetric_components_3d
 
 if TYPE_CHECKING:
-    from .staging import Stage, StagePlan
+    from .stages import Stage, StagePlan
 
 __all__ = ["JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
 
@@ -188,7 +188,7 @@ class ModelArrays:
     mesh: PolyhedronMesh | None = None  # the faces of 3D blocks (None in 2D)
     face_joint: np.ndarray | None = None  # (nf,) joint material of each mesh face, -1 = by materials (3D)
     block_removed: np.ndarray | None = None  # (nb,) bool: excavated by a stage (held, touches nothing); None: none
-    stages: tuple[StagePlan, ...] = ()  # the staged analysis (srdda.staging), resolved; () runs as one stage
+    stages: tuple[StagePlan, ...] = ()  # the staged analysis (srdda.stages), resolved; () runs as one stage
     base: ModelArrays | None = None  # of a stage's arrays: the model as built (what a results file stores)
 
     @property
@@ -241,7 +241,7 @@ class Model:
     base_acceleration: MotionHistory | None = None
     bolts: list[BoltSpec] = field(default_factory=list)
     allow_overlap: bool = False  # True: blocks that overlap at the start are accepted (their contacts push them apart)
-    stages: list[Stage] = field(default_factory=list)  # the staged analysis (srdda.staging); [] runs as today
+    stages: list[Stage] = field(default_factory=list)  # the staged analysis (srdda.stages); [] runs as today
 
     # -- building ---------------------------------------------------------
     def add_material(self, name: str, material: Material) -> str:
@@ -594,7 +594,7 @@ class Model:
             raise ModelError(f"base acceleration: {exc}") from exc
 
     def add_stage(self, stage: Stage) -> int:
-        """Append a stage of a staged analysis (:class:`srdda.staging.Stage`); returns its index.
+        """Append a stage of a staged analysis (:class:`srdda.stages.Stage`); returns its index.
 
         Its names (blocks, bolts, materials) are checked when the model is compiled (:meth:`arrays`).
         """
@@ -750,7 +750,7 @@ class Model:
     # -- compiling ---------------------------------------------------------
     def arrays(self) -> ModelArrays:
         """Flat arrays of the whole model for the time loop."""
-        from .staging import resolve_stages  # stages name blocks, bolts and materials of this model
+        from .stages import resolve_stages  # stages name blocks, bolts and materials of this model
 
         if not self.blocks:
             raise ModelError("the model has no blocks")

@@ -27,7 +27,7 @@ from ..geometry.polyhedron import PolyhedronError, box
 from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..settings import RunSettings
 from .records import RecordError, record_history
-from ..staging import Stage, resolve_stages
+from ..stages import Stage, resolve_stages
 from .schema import (BaseAccelerationSection, BlockSection, CuttingSection, HistorySection, JointMaterialSection,
                      ModelFile, StageSection)
 

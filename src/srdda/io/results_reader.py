@@ -35,7 +35,7 @@ from ..integrators.methods import METHODS
 from ..ledger import ENERGY_NAMES
 from ..model import JointTable, Load, ModelArrays
 from ..settings import RunSettings
-from ..staging import StagePlan
+from ..stages import StagePlan
 from ..state import State
 from .checkpoint import CheckpointVersionError, intact_checkpoints, read_checkpoint
 from .integrity import (CutShortFile, DamagedError, describe_error, ordered_prefix, read_attr, read_intact,
@@ -210,7 +210,7 @@ def _model_arrays(g: h5py.Group, path: str | Path) -> ModelArrays:
             table = g["joint_properties"][()]
             nan = np.full(len(table), np.nan)
             kwargs["joints"] = JointTable(table[:, 0], table[:, 1], table[:, 2], nan, nan.copy(), nan.copy())
-        elif f_.name == "stages":  # the resolved stages of a staged run (srdda.staging)
+        elif f_.name == "stages":  # the resolved stages of a staged run (srdda.stages)
             kwargs["stages"] = stage_plans(g)
         elif f_.name in g:
             kwargs[f_.name] = g[f_.name][()]

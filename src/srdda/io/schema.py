@@ -234,7 +234,7 @@ class CuttingSection(_Strict):
 
 
 class StageSection(_Strict):
-    """One stage of a staged analysis (srdda.staging.Stage): its kind and what changes at its start."""
+    """One stage of a staged analysis (srdda.stages.Stage): its kind and what changes at its start."""
 
     name: str = Field(min_length=1)
     kind: Literal["equilibrium", "dynamic"] = "dynamic"

@@ -13,7 +13,7 @@ from ..model import JointMaterial, Material, Model
 from ..results import Result
 from ..settings import RunSettings
 from ..simulation import run
-from ..staging import Stage
+from ..stages import Stage
 from .registry import Row, case, row
 
 __all__ = ["stacked_column"]
