@@ -8,10 +8,10 @@ increments Δd and the velocity and acceleration at t (Shi's scheme: the
 step's constant acceleration a = 2Δd/Δt² - 2V/Δt; the generalized-α schemes:
 A(t + Δt - α_m)). The inertial force m·a of the block's translation is what
 the other forces leave unbalanced: the block's **unbalanced force** (N; N/m
-in 2D). Its Δd of
-translation is the step's displacement of the block's centroid (the
-displacement field is affine about the centroid, so this is exact). At rest in
-equilibrium it is 0; a block falling freely under gravity has m·g.
+in 2D). Its Δd of translation is the step's displacement of the block's
+centroid (the displacement field is affine about the centroid, so this is
+exact). At rest in equilibrium it is 0; a block falling freely under gravity
+has m·g. Rotations and strains are left out, as 3DEC's ratio takes forces only.
 
 The **unbalanced-force ratio** is 3DEC's: the largest unbalanced force of the
 moving blocks over the mean applied force of the moving blocks, the applied
