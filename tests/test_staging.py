@@ -313,3 +313,19 @@ def test_plots_vtk_and_the_summary_show_the_stages(tmp_path: Path) -> None:
     first = meshio.read(tmp_path / "vtk" / f"blocks_{dig['first_step']:07d}.vtu")
     assert first.cell_data["removed"][0].tolist() == [0, 1, 0, 0] and set(first.cell_data["stage"][0]) == {1}
     assert np.all(first.point_data["displacement"] == 0.0)  # measured from the dig stage's start
+
+
+def test_a_stage_of_a_model_file_starts_an_earthquake_record_at_its_start(tmp_path: Path) -> None:
+    # the record is read as [base_acceleration] reads it (path relative to the model file's folder); the stage's
+    # arrays hold it shifted to the stage's start: at t = start + τ the ground acceleration is the record's at τ
+    from srdda.io.records import SYNTHETIC_RECORD, record_history
+
+    (tmp_path / "quake.AT2").write_bytes(Path(SYNTHETIC_RECORD).read_bytes())
+    data = _file_model(base_acceleration={"record": "quake.AT2", "baseline": "linear"}, run={"steps": 4})
+    model, settings = model_from_dict(data, "m.toml", base_dir=tmp_path)
+    res = srdda.run(model, settings)
+    start = res.stages[1]["start_time"]
+    arrays = stage_arrays(model.arrays(), stage_mark(res.final_state))
+    record = record_history(tmp_path / "quake.AT2", 2, None, None, 1.0, "linear", None)
+    for tau in (0.0, 0.013, 1.7):
+        np.testing.assert_array_equal(arrays.links.base_acceleration(start + tau), record(start + tau - start))
