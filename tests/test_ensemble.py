@@ -139,8 +139,8 @@ def _numba_threads() -> int:
 def test_worker_processes_share_the_cores_among_their_numba_threads() -> None:
     # numba starts one thread per core in every process: two workers on two cores would each run a large
     # model's compiled loops on two threads (four threads on two cores)
-    from srdda.ensemble.runner import _client
-    with _client(2, None, processes=True) as client:
+    from srdda.ensemble.runner import dask_client
+    with dask_client(2, None, processes=True) as client:
         threads = {client.submit(_numba_threads, pure=False).result() for _ in range(4)}
     assert threads == {max(1, (os.cpu_count() or 1) // 2)}
 

@@ -31,6 +31,7 @@ from .geometry.jointsets2d import JointSet, circular_opening, joint_traces, poly
 from .cutmodel import add_cut_blocks, add_cut_polyhedra
 from .geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
 from .geometry.jointsets3d import JointPlanes, JointSet3D, joint_planes
+from .fos import FactorOfSafety, FailureCriterion, factor_of_safety
 
 __version__ = "0.1.0"
 
@@ -42,5 +43,5 @@ __all__ = [
     "BlockCut", "CuttingError", "JointSet", "add_cut_blocks", "circular_opening", "cut_blocks", "joint_traces",
     "polygonal_opening",
     "JointPlanes", "JointSet3D", "PolyhedralCut", "add_cut_polyhedra", "convex_hull_polyhedron", "cut_polyhedra",
-    "joint_planes", "Stage", "Settled", "settle",
+    "joint_planes", "FactorOfSafety", "FailureCriterion", "factor_of_safety", "Stage", "Settled", "settle",
 ]

@@ -477,6 +477,70 @@ def ensemble_command(spec: str, runs: int | None, workers: int | None, scheduler
                "summary.json, summary.csv, figures/, report.html")
 
 
+def _grouped_notes(notes: list[str]) -> list[tuple[str, int]]:
+    """Warnings that differ only in their numbers, once each (the first) with how many there were."""
+    import re
+
+    groups: dict[str, list[str]] = {}
+    for note in notes:
+        groups.setdefault(re.sub(r"[-+]?\d[\d.e+-]*", "#", note), []).append(note)
+    return [(found[0], len(found)) for found in groups.values()]
+
+
+@main.command("fos")
+@click.argument("model", type=click.Path(exists=True, dir_okay=False))
+@click.option("--joint", "joints", multiple=True,
+              help="Reduce only this joint material (repeat for several; default: every joint).")
+@click.option("--tolerance", type=click.FloatRange(min=0, max=1, min_open=True, max_open=True), default=0.005,
+              show_default=True, help="Stop when the bracket [stable, failed] is narrower than this fraction of F.")
+@click.option("--initial", type=click.FloatRange(min=0, min_open=True), default=1.0, show_default=True,
+              help="The first factor tried; the bracket is searched from it by doubling or halving.")
+@click.option("--points", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Factors tried per round (1: bisection); run in parallel with --workers.")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Worker processes of a local Dask cluster for each round's factors (default: none, run here).")
+@click.option("--scheduler", default=None, help="Address of a running Dask scheduler to use instead (tcp://HOST:PORT).")
+@click.option("--steps", type=click.IntRange(min=6), default=None,
+              help="Static steps of each equilibrium run (default 60).")
+@click.option("--dt", type=click.FloatRange(min=0, min_open=True), default=None,
+              help="Time step of the equilibrium runs (s; default: Shi's bound sqrt(2 g2 w0/|g|)).")
+@click.option("--contact-solver", type=click.Choice(["open-close", "newton"]), default="newton", show_default=True,
+              help="The contact solve of the equilibrium runs.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON document instead of the table.")
+@click.option("--quiet", is_flag=True, help="No line per trial while it runs.")
+def fos_command(model: str, joints: tuple[str, ...], tolerance: float, initial: float, points: int,
+                workers: int | None, scheduler: str | None, steps: int | None, dt: float | None, contact_solver: str,
+                as_json: bool, quiet: bool) -> None:
+    """Factor of safety by shear strength reduction: c/F, arctan(tan φ/F) (docs/factor-of-safety.md)."""
+    from .fos import FailureCriterion, FosError, Trial, factor_of_safety
+
+    if workers is not None and scheduler is not None:
+        raise BadInput("give --workers (a local cluster) or --scheduler (a running one), not both")
+    mdl, settings = _load(model)
+    _compile(mdl, settings, model)
+
+    def show(trial: Trial) -> None:
+        verdict = "failed" if trial.failed else "stable"
+        click.echo(f"F = {trial.factor:.6g}: {verdict} (growth over the last window {trial.growth:.3g} m, "
+                   f"previous {trial.previous:.3g} m, {trial.seconds:.1f} s)", err=True)
+
+    try:
+        criterion = FailureCriterion(steps=steps or FailureCriterion.steps, dt=dt,
+                                     contact_solver="newton" if contact_solver == "newton" else "open-close")
+        result = factor_of_safety(mdl, settings, list(joints) or None, tolerance, initial, points, criterion,
+                                  workers, scheduler, progress=None if quiet or as_json else show)
+    except FosError as exc:
+        raise BadInput(f"{model}: {exc}") from None
+    if as_json:
+        click.echo(json.dumps(result.to_dict(), indent=2))
+        return
+    for note, count in _grouped_notes([n for t in result.trials for n in t.notes]):
+        click.echo(f"warning: in {count} of {len(result.trials)} runs: {note}", err=True)
+    click.echo(f"FS = {result.factor_of_safety:.4f}, bracket [{result.stable:.4f} stable, {result.failed:.4f} failed] "
+               f"after {len(result.trials)} runs ({sum(t.seconds for t in result.trials):.1f} s); joints reduced: "
+               f"{', '.join(result.joints)}")
+
+
 main.add_command(plot_command)
 main.add_command(animate_command)
 main.add_command(vtk_command)

@@ -35,7 +35,8 @@ from .solvers import LinearSolver, SolverError
 from .state import State
 from .term import StepContext, StepCut, Term
 
-__all__ = ["StepOutcome", "Stepper", "default_terms", "model_half_height", "contact_parameters", "time_step_advice"]
+__all__ = ["StepOutcome", "Stepper", "default_terms", "model_half_height", "contact_parameters", "shi_step_bound",
+           "time_step_advice"]
 
 
 @dataclass(frozen=True)
@@ -69,19 +70,25 @@ def contact_parameters(arrays: ModelArrays, settings: RunSettings, w0: float) ->
                              settings.open_close_tolerance * w0, settings.open_close_force_tolerance)
 
 
+def shi_step_bound(arrays: ModelArrays, settings: RunSettings) -> float | None:
+    """Shi's bound on Δt (s): a vertex may move g2·w0 in one step, so a block starting from rest under
+    gravity g may take steps of at most sqrt(2·g2·w0/|g|). None without gravity."""
+    g = float(np.linalg.norm(arrays.gravity))
+    if g == 0.0:
+        return None
+    return float(np.sqrt(2.0 * settings.max_displacement_ratio * model_half_height(arrays.vertices) / g))
+
+
 def time_step_advice(arrays: ModelArrays, settings: RunSettings) -> str | None:
     """A warning when Δt is far too large for a contact model, else None (docs/reliability.md).
 
-    Shi's bound: a vertex may move g2·w0 in one step, so a block starting from
-    rest under gravity g may take steps of at most sqrt(2·g2·w0/|g|). Above ten
-    times that, the first steps are cut again and again and the run spends its
-    time finding a Δt the user could have given.
+    Above ten times :func:`shi_step_bound`, the first steps are cut again and
+    again and the run spends its time finding a Δt the user could have given.
     """
-    g = float(np.linalg.norm(arrays.gravity))
-    if not settings.contacts or arrays.n_blocks < 2 or g == 0.0:
+    bound = shi_step_bound(arrays, settings)
+    if not settings.contacts or arrays.n_blocks < 2 or bound is None:
         return None
     reach = settings.max_displacement_ratio * model_half_height(arrays.vertices)
-    bound = float(np.sqrt(2.0 * reach / g))
     if settings.dt <= 10.0 * bound:
         return None
     return (f"dt = {settings.dt:.3g} s is far too large for this contact model: a block falling from rest moves "

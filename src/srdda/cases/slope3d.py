@@ -22,6 +22,13 @@ gravity (0, 0, -g). Angles in the functions below are in degrees.
   (plunge ψ_i); FS = (N_A tan φ_A + N_B tan φ_B) / (W sin ψ_i). When FS < 1
   the wedge slides along the line of intersection keeping contact with both
   planes, so N_A and N_B stay and a = g sin ψ_i (1 - FS).
+* **Wedge with cohesion and water** (Hoek & Bray 1981, ch. 8, and their
+  appendix 1, the "short" solution; Wyllie & Mah 2004, appendix III): with
+  the wedge fully drained at its outcropping edges and the water pressure
+  rising to ½ γ_w H on the line of intersection (H: the wedge's height),
+  FS = 3/(γH) (c_A X + c_B Y) + (A − γ_w/(2γ) X) tan φ_A + (B − γ_w/(2γ) Y) tan φ_B
+  (:func:`hoek_bray_wedge_factor_of_safety`, the angles from the wedge's
+  geometry by :func:`hoek_bray_wedge_angles`).
 
 The builders return :class:`~srdda.model.Model` s with real inclined
 geometry (no tilted gravity) and fixed joint-plane blocks; they need 3D
@@ -29,7 +36,7 @@ contacts to run.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -38,11 +45,13 @@ from ..geometry.jointsets3d import plane_normal
 from ..geometry.polyhedron import box
 from ..model import JointMaterial, Material, Model
 
-__all__ = ["G", "SLIDE_TOPPLE_CASES", "SlideToppleCase", "WedgeSolution", "block_on_incline_model",
+__all__ = ["G", "GAMMA_WATER", "HoekBrayAngles", "hoek_bray_wedge_angles", "hoek_bray_wedge_factor_of_safety",
+           "wedge_vertices", "SLIDE_TOPPLE_CASES", "SlideToppleCase", "WedgeSolution", "block_on_incline_model",
            "incline_acceleration", "slide_topple_mode", "slide_topple_model", "toppling_angular_acceleration",
            "wedge_friction_for", "wedge_model", "wedge_solution", "WEDGE_PLANES", "WEDGE_FACE"]
 
 G = 9.81  # m/s²
+GAMMA_WATER = 9810.0  # N/m³, unit weight of water
 ROCK = Material(density=2600.0, young=10e9, poisson=0.25)
 
 
@@ -254,3 +263,89 @@ def wedge_model(phi: float, height: float = 6.0, depth: float = 2.0, plane_a: tu
     arrays = model.arrays()
     model.add_measured_point(arrays.moments(arrays.vertices).centroid[0], block=0)
     return model
+
+
+# -- the wedge with cohesion and water (Hoek & Bray's short solution) ----------------------------------
+@dataclass(frozen=True)
+class HoekBrayAngles:
+    """The angles (degrees) of Hoek & Bray's wedge solution. Lines: 1 = A ∩ face, 2 = B ∩ face,
+    3 = A ∩ upper surface, 4 = B ∩ upper surface, 5 = A ∩ B; n_A, n_B the planes' normals."""
+
+    dip_a: float  # ψ_a
+    dip_b: float  # ψ_b
+    plunge: float  # ψ_5, of the line of intersection
+    na_nb: float  # θ_na.nb
+    t24: float  # θ_24, between lines 2 and 4 (on plane B)
+    t45: float  # θ_45
+    t2_na: float  # θ_2.na, between line 2 and n_A
+    t13: float  # θ_13 (on plane A)
+    t35: float  # θ_35
+    t1_nb: float  # θ_1.nb
+
+
+def hoek_bray_wedge_factor_of_safety(angles: HoekBrayAngles, height: float, phi_a: float, phi_b: float,
+                                     cohesion_a: float = 0.0, cohesion_b: float = 0.0, gamma: float = 2600.0 * G,
+                                     gamma_water: float = 0.0) -> float:
+    """Hoek & Bray's factor of safety of a wedge with cohesion and water (module doc).
+
+    ``height`` H of the wedge (m), friction φ (°), cohesion c (Pa), unit
+    weights γ of the rock and γ_w of water (N/m³; γ_w = 0: dry, else the
+    wedge is saturated, the pressure peaking at ½ γ_w H on the line of
+    intersection):
+
+        X = sin θ24 / (sin θ45 cos θ2.na),  Y = sin θ13 / (sin θ35 cos θ1.nb),
+        A = (cos ψa − cos ψb cos θna.nb) / (sin ψ5 sin² θna.nb),
+        B = (cos ψb − cos ψa cos θna.nb) / (sin ψ5 sin² θna.nb),
+        FS = 3/(γH) (c_A X + c_B Y) + (A − γw/(2γ) X) tan φ_A + (B − γw/(2γ) Y) tan φ_B.
+    """
+    d = {k: np.radians(v) for k, v in asdict(angles).items()}
+    x = np.sin(d["t24"]) / (np.sin(d["t45"]) * np.cos(d["t2_na"]))
+    y = np.sin(d["t13"]) / (np.sin(d["t35"]) * np.cos(d["t1_nb"]))
+    denominator = np.sin(d["plunge"]) * np.sin(d["na_nb"]) ** 2
+    a = (np.cos(d["dip_a"]) - np.cos(d["dip_b"]) * np.cos(d["na_nb"])) / denominator
+    b = (np.cos(d["dip_b"]) - np.cos(d["dip_a"]) * np.cos(d["na_nb"])) / denominator
+    water = gamma_water / (2.0 * gamma)
+    return float(3.0 / (gamma * height) * (cohesion_a * x + cohesion_b * y) + (a - water * x) * np.tan(np.radians(phi_a))
+                 + (b - water * y) * np.tan(np.radians(phi_b)))
+
+
+def wedge_vertices(height: float, plane_a: tuple[float, float] = WEDGE_PLANES[0],
+                   plane_b: tuple[float, float] = WEDGE_PLANES[1], face: tuple[float, float] = WEDGE_FACE
+                   ) -> dict[str, np.ndarray]:
+    """The corners of the wedge under a horizontal top at ``height`` above the daylight point (the origin):
+    "toe" (where the line of intersection daylights), "top" (where it meets the top), "crest A", "crest B"
+    (where plane A, B meets the face and the top)."""
+    na, nb, nf = plane_normal(*plane_a), plane_normal(*plane_b), plane_normal(*face)
+    line = _line_of_intersection(na, nb)
+    ez = np.array([0.0, 0.0, 1.0])
+
+    def meet(n: np.ndarray) -> np.ndarray:  # the point of plane n and the face at the top
+        return np.linalg.solve(np.array([n, nf, ez]), np.array([0.0, 0.0, height]))
+
+    return {"toe": np.zeros(3), "top": line * (height / line[2]), "crest A": meet(na), "crest B": meet(nb)}
+
+
+def _angle(u: np.ndarray, v: np.ndarray) -> float:
+    return float(np.degrees(np.arccos(np.clip(np.dot(u, v) / (np.linalg.norm(u) * np.linalg.norm(v)), -1.0, 1.0))))
+
+
+def hoek_bray_wedge_angles(plane_a: tuple[float, float] = WEDGE_PLANES[0],
+                           plane_b: tuple[float, float] = WEDGE_PLANES[1],
+                           face: tuple[float, float] = WEDGE_FACE) -> HoekBrayAngles:
+    """Hoek & Bray's angles of the wedge under a horizontal top (:func:`wedge_vertices`).
+
+    The angles between lines are the corners of the wedge's faces on A
+    (toe, top, crest A) and B; θ_na.nb is the angle between the planes'
+    upward normals (:func:`~srdda.geometry.jointsets3d.plane_normal`: 101° for
+    Hoek & Bray's example planes 45/105 and 70/235, as they give it); θ2.na and
+    θ1.nb are the acute angles between a line and a normal.
+    """
+    na, nb = plane_normal(*plane_a), plane_normal(*plane_b)
+    v = wedge_vertices(1.0, plane_a, plane_b, face)
+    toe, top, ca, cb = v["toe"], v["top"], v["crest A"], v["crest B"]
+    line = _line_of_intersection(na, nb)
+    return HoekBrayAngles(
+        dip_a=plane_a[0], dip_b=plane_b[0], plunge=float(np.degrees(np.arcsin(-line[2]))),
+        na_nb=_angle(na, nb), t24=_angle(toe - cb, top - cb), t45=_angle(cb - top, toe - top),
+        t2_na=min(_angle(cb - toe, na), _angle(toe - cb, na)), t13=_angle(toe - ca, top - ca),
+        t35=_angle(ca - top, toe - top), t1_nb=min(_angle(ca - toe, nb), _angle(toe - ca, nb)))

@@ -34,7 +34,7 @@ from .collect import RockfallRecorder, SettleRule
 from .sampling import apply_values, sample, tracked_block
 from .spec import EnsembleSpec, SpecError, load_spec
 
-__all__ = ["run_one", "run_ensemble", "EnsembleRun", "read_run_files"]
+__all__ = ["run_one", "run_ensemble", "EnsembleRun", "read_run_files", "dask_client"]
 
 RUNS_DIR = "runs"
 FINGERPRINT_FILE = "ensemble.json"
@@ -132,7 +132,7 @@ def numba_threads_per_worker(workers: int) -> int:
 
 
 @contextmanager
-def _client(workers: int | None, scheduler: str | None, processes: bool) -> Iterator[Any]:
+def dask_client(workers: int | None, scheduler: str | None, processes: bool) -> Iterator[Any]:
     """A Dask client: of the running scheduler at ``scheduler``, or of a new LocalCluster closed on exit."""
     from distributed import Client, LocalCluster
 
@@ -192,7 +192,7 @@ def _run_held(spec: EnsembleSpec, base: dict[str, Any], out: Path, workers: int 
     todo = [i for i in range(spec.runs) if i not in done]
     failed = sum(r["status"] != "ok" for r in done.values())
     if todo:
-        with _client(workers, scheduler, processes) as client, \
+        with dask_client(workers, scheduler, processes) as client, \
                 tqdm(total=spec.runs, initial=len(done), unit="run", desc="ensemble", disable=not progress) as bar:
             from distributed import as_completed
 

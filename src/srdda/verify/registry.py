@@ -126,6 +126,8 @@ EXPECTED_SECONDS: dict[str, tuple[float, float]] = {
     "wedge-rest-3d": (19.4, 19.4),
     "impact-restitution-2d": (6.0, 26.2),
     "impact-restitution-3d": (7.4, 26.4),
+    "fos-plane-2d": (4.1, 4.1),
+    "fos-wedge-3d": (9.7, 9.7),
 }
 
 
