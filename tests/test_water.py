@@ -271,3 +271,31 @@ def test_a_wedge_gets_the_water_on_each_plane(level):
         exact = UNIT_WEIGHT * float(np.linalg.norm((integral[faces, None] * areas[faces]).sum(axis=0)))
         assert exact > 0.0
         assert float(np.sum(force[on])) == pytest.approx(exact, rel=1e-12)  # sums of the same terms: round-off
+
+
+@pytest.mark.parametrize("levels", [(-5.0, 2.0), (-5.0, 2.0, -5.0)])
+def test_a_stage_raises_and_lowers_the_water(levels):
+    # the uplift case of srdda verify, dry at first (the surface 5 m under the joint), then each stage moves the
+    # surface and settles (equilibrium stages): the joint carries W − p·A under water, W again once drained.
+    # The ratio 1e-5 leaves each block's unbalanced force below 1e-5 of its weight: the springs carry the
+    # closed form to that, and 1e-4 of W leaves 10 times that margin.
+    from srdda.verify.water import _uplift_model
+    model = _uplift_model(2)
+    model.water = model.water.at_level(levels[0])
+    model.add_stage(srdda.Stage("dry", kind="equilibrium"))
+    for k, level in enumerate(levels[1:]):
+        model.add_stage(srdda.Stage(f"level {k}", kind="equilibrium", water_level=level))
+    res = srdda.run(model, RunSettings(dt=1e-3, n_steps=1, penalty=1e10))
+    assert all(stage["reached"] for stage in res.stages), res.stages
+    weight = float(model.arrays().block_mass[1]) * 10.0
+    pressure = UNIT_WEIGHT * max(levels[-1], 0.0)
+    carried = float(np.sum(res.final_state.contacts.normal_force))
+    assert carried == pytest.approx(weight - pressure * 2.0, rel=1e-4)
+
+
+def test_a_stage_water_level_must_be_finite():
+    from srdda.verify.water import _uplift_model
+    model = _uplift_model(2)
+    model.add_stage(srdda.Stage("flood", water_level=float("nan")))
+    with pytest.raises(ModelError, match="water_level"):
+        model.arrays()

@@ -22,6 +22,8 @@ from .model import JointMaterial, Load, Material, Model, ModelError
 from .results import Result
 from .settings import RunSettings
 from .simulation import run
+from .stages import Stage
+from .equilibrium import Settled, settle
 from .state import State
 from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume
@@ -42,5 +44,5 @@ __all__ = [
     "BlockCut", "CuttingError", "JointSet", "add_cut_blocks", "circular_opening", "cut_blocks", "joint_traces",
     "polygonal_opening",
     "JointPlanes", "JointSet3D", "PolyhedralCut", "add_cut_polyhedra", "convex_hull_polyhedron", "cut_polyhedra",
-    "joint_planes", "FactorOfSafety", "FailureCriterion", "factor_of_safety",
+    "joint_planes", "FactorOfSafety", "FailureCriterion", "factor_of_safety", "Stage", "Settled", "settle",
 ]

@@ -175,7 +175,8 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
             raise click.UsageError(f"--resume continues a run with the settings and the folder its file keeps; "
                                    f"{', '.join(given)} cannot change them (run the model again for that)")
         prepared = prepare_resume_run(resume_file, flush_every)
-        store_path, total, desc = prepared.path, prepared.settings.n_steps, f"resume {prepared.settings.method}"
+        total = None if prepared.arrays.stages else prepared.settings.n_steps  # a staged run: its stages say
+        store_path, desc = prepared.path, f"resume {prepared.settings.method}"
         start = (f"continuing {store_path} from step {prepared.start}" if prepared.start >= 0 else
                  f"restarting {store_path} from its first step")
         go = prepared.run
@@ -183,7 +184,8 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
         if model is None:
             raise click.UsageError("missing MODEL (or --resume RESULTS)")
         store, arrays, settings = _new_run(model, method, steps, end_time, dt, device, out, overwrite, flush_every)
-        store_path, total, desc, start = store.path, settings.n_steps, settings.method, f"writing {store.path}"
+        total = None if arrays.stages else settings.n_steps  # a staged run: its stages say how many
+        store_path, desc, start = store.path, settings.method, f"writing {store.path}"
 
         def go(progress):
             return run(arrays, settings, progress=progress, recorders=[store], keep_history=False)
@@ -246,8 +248,9 @@ def check_command(model: str) -> None:
     mdl, settings = _load(model)
     arrays = _compile(mdl, settings, model)
     length = f"{settings.n_steps} steps" if settings.n_steps is not None else f"until t = {settings.end_time} s"
+    stages = f"; stages: {', '.join(f'{p.name} ({p.kind})' for p in arrays.stages)}" if arrays.stages else ""
     click.echo(f"ok: {arrays.n_blocks} blocks ({arrays.block_type.dim}D), {len(arrays.vertices)} vertices, method "
-               f"{settings.method}, {length} of {settings.dt} s")
+               f"{settings.method}, {length} of {settings.dt} s{stages}")
 
 
 @main.command("show")

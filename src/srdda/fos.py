@@ -26,7 +26,7 @@ import numpy as np
 
 from .model import JointTable, Model, ModelArrays, ModelError
 from .settings import RunSettings
-from .simulation import run
+from .simulation import run_single
 from .step import shi_step_bound
 
 __all__ = ["FailureCriterion", "FactorOfSafety", "FosError", "Trial", "factor_of_safety", "reduce_strength",
@@ -164,7 +164,7 @@ def settle_displacements(arrays: ModelArrays, settings: RunSettings, criterion: 
     static = replace(settings, velocity_ratio=0.0, contact_solver=criterion.contact_solver, dt=dt,
                      n_steps=criterion.steps, end_time=None, record_every=1, min_dt=None)
     at_rest = replace(arrays, velocity=np.zeros_like(arrays.velocity))  # the model's initial velocities left out
-    result = run(at_rest, static, keep_vertices=False)
+    result = run_single(at_rest, static, keep_vertices=False)  # the model as built (its stages left aside)
     movable = ~arrays.block_fixed
     centroid = result.array("centroid")[:, movable]
     moved = np.linalg.norm(centroid - centroid[0], axis=-1)

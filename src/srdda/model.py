@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import shapely
@@ -25,6 +25,9 @@ from .kinematics.blocktype import PLANE, SOLID, BlockType, block_type_of_dimensi
 from .kinematics.shape3d import elasticity_matrix_3d
 from .kinematics.update2d import rotate_symmetric_components
 from .kinematics.update3d import rotate_symmetric_components_3d
+
+if TYPE_CHECKING:
+    from .stages import Stage, StagePlan
 
 __all__ = ["JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
 
@@ -186,6 +189,9 @@ class ModelArrays:
     mesh: PolyhedronMesh | None = None  # the faces of 3D blocks (None in 2D)
     face_joint: np.ndarray | None = None  # (nf,) joint material of each mesh face, -1 = by materials (3D)
     water: WaterTable | None = None  # the water table (docs/water.md); change it with dataclasses.replace
+    block_removed: np.ndarray | None = None  # (nb,) bool: excavated by a stage (held, touches nothing); None: none
+    stages: tuple[StagePlan, ...] = ()  # the staged analysis (srdda.stages), resolved; () runs as one stage
+    base: ModelArrays | None = None  # of a stage's arrays: the model as built (what a results file stores)
 
     @property
     def n_blocks(self) -> int:
@@ -238,6 +244,7 @@ class Model:
     bolts: list[BoltSpec] = field(default_factory=list)
     allow_overlap: bool = False  # True: blocks that overlap at the start are accepted (their contacts push them apart)
     water: WaterTable | None = None  # the water in the joints (set_water, docs/water.md)
+    stages: list[Stage] = field(default_factory=list)  # the staged analysis (srdda.stages); [] runs as today
 
     # -- building ---------------------------------------------------------
     def add_material(self, name: str, material: Material) -> str:
@@ -603,6 +610,14 @@ class Model:
             raise ModelError(f"water.{exc}") from None
         return self.water
 
+    def add_stage(self, stage: Stage) -> int:
+        """Append a stage of a staged analysis (:class:`srdda.stages.Stage`); returns its index.
+
+        Its names (blocks, bolts, materials) are checked when the model is compiled (:meth:`arrays`).
+        """
+        self.stages.append(stage)
+        return len(self.stages) - 1
+
     def _check_overlaps(self, vertices: np.ndarray, block_ptr: np.ndarray) -> None:
         """ModelError naming the blocks that overlap at the start (more than 1e-6 of the smaller area)."""
         pairs, areas = overlapping_pairs(vertices, block_ptr)
@@ -652,6 +667,8 @@ class Model:
             out.base_acceleration = self.base_acceleration.padded(SOLID.dim)
         out.bolts = [replace(b, point_a=at(b.point_a), point_b=at(b.point_b)) for b in self.bolts]
         out.water = None if self.water is None else self.water.padded()
+        out.stages = [replace(s, base_acceleration=None if s.base_acceleration is None
+                              else s.base_acceleration.padded(SOLID.dim)) for s in self.stages]
         return out
 
     def add_box(self, lo: Sequence[float], hi: Sequence[float], material: str, **options: object) -> int:
@@ -751,6 +768,8 @@ class Model:
     # -- compiling ---------------------------------------------------------
     def arrays(self) -> ModelArrays:
         """Flat arrays of the whole model for the time loop."""
+        from .stages import resolve_stages  # stages name blocks, bolts and materials of this model
+
         if not self.blocks:
             raise ModelError("the model has no blocks")
         bt = block_type_of_dimension(self.dim)
@@ -844,6 +863,7 @@ class Model:
             mesh=mesh,
             face_joint=face_joint,
             water=self.water,
+            stages=resolve_stages(self, self.stages) if self.stages else (),
         )
         self._check_held(arrays)
         self._check_water(arrays)

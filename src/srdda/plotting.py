@@ -37,6 +37,8 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
+from .results import removed_blocks  # noqa: E402
+
 __all__ = ["history", "quantity_names", "components", "block_values", "method_label", "plot_blocks",
            "fig_configuration",
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
@@ -331,7 +333,15 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
     verts = res.array("vertices")
     index = index % len(verts)
     values = block_values(res, index, color)
-    coll = plot_blocks(ax, verts[index], res.block_ptr, values)
+    ptr = res.block_ptr
+    removed = removed_blocks(int(res.array("step")[index]), getattr(res, "stages", ()), len(ptr) - 1)
+    kept = np.flatnonzero(~removed)  # a block excavated by a stage: an empty dashed outline, under the others
+    sizes = np.diff(ptr)[kept]
+    coll = plot_blocks(ax, np.concatenate([verts[index][ptr[b]:ptr[b + 1]] for b in kept]),
+                       np.concatenate([[0], np.cumsum(sizes)]), None if values is None else values[kept])
+    if np.any(removed):
+        ax.add_collection(PolyCollection([verts[index][ptr[b]:ptr[b + 1]] for b in np.flatnonzero(removed)],
+                                         facecolor="none", edgecolor="0.5", linestyle="--", linewidth=0.6))
     if values is not None:
         fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.7)
     if trails:
@@ -374,15 +384,17 @@ def fig_bolt_forces(res: Results) -> Figure:
             i = int(np.argmax(broken[:, k]))
             ax.plot(t[i], force[max(i - 1, 0), k] / 1e3, "x", color=line.get_color(), ms=9)
     ax.set(xlabel="time (s)", ylabel="axial force (kN)", title=f"{method_label(res.method)}: bolt forces")
+    mark_stages(ax, res)
     if force.shape[1] <= MAX_LEGEND:
         ax.legend(fontsize="small")
     return fig
 
 
 def step_title(res: Results, index: int) -> str:
-    """"METHOD: step N, t = T s" of recorded row ``index``."""
+    """"METHOD: step N, t = T s" of recorded row ``index`` (and ", stage NAME" in a staged run)."""
     step, time = int(res.array("step")[index]), float(res.array("time")[index])
-    return f"{method_label(res.method)}: step {step}, t = {time:.4g} s"
+    begun = [row["name"] for row in getattr(res, "stages", ()) if row["first_step"] <= step]
+    return f"{method_label(res.method)}: step {step}, t = {time:.4g} s" + (f", stage {begun[-1]}" if begun else "")
 
 
 def _trails(ax: Any, res: Results, index: int) -> None:
@@ -471,6 +483,15 @@ def fig_trajectories(res: Results, points: str = "measured", title: str | None =
     return fig
 
 
+def mark_stages(ax: plt.Axes, res: Results, names: bool = True) -> None:
+    """The starts of a staged run's stages on a time axis: a dotted vertical line each, with the stage's name."""
+    for row in getattr(res, "stages", ()):
+        ax.axvline(row["start_time"], color="0.45", ls=":", lw=0.9)
+        if names:
+            ax.text(row["start_time"], 1.0, f" {row['name']}", transform=ax.get_xaxis_transform(), rotation=90,
+                    va="top", ha="left", fontsize=7, color="0.3")
+
+
 def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
                     blocks: Sequence[int] | None = None) -> Figure:
     """A recorded quantity against time, one line per block (or measured point; ``blocks`` picks them)."""
@@ -494,7 +515,9 @@ def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
             style, color = (styles[j % len(styles)], f"C{r % 10}") if len(runs) > 1 else ("-", f"C{j % 10}")
             ax.plot(t, y[:, b], style, color=color, label=f"{label}: {names[b]}" if len(runs) > 1 else names[b])
     ax.set(xlabel="time (s)", ylabel=quantity_label(next(iter(runs.values())), quantity))
-    if len(ax.get_lines()) <= MAX_LEGEND:
+    lines = len(ax.get_lines())
+    mark_stages(ax, next(iter(runs.values())))
+    if lines <= MAX_LEGEND:
         fig.legend(fontsize="small", loc="outside right upper")
     return fig
 
@@ -717,6 +740,7 @@ def fig_energy_ledger(results: Results | Mapping[str, Results], title: str = "")
         factor, prefix = _si_prefix(max(float(np.max(np.abs(s[key]), initial=0.0)) for s in series.values()))
         for (method, res), style in zip(runs.items(), ("-", "--", ":", "-.") * len(runs)):
             ax.plot(history(res, "time"), series[method][key] / factor, style, lw=0.9, label=method_label(method))
+        mark_stages(ax, first, names=ax is axes.flat[0])
         ax.set_title(panel, fontsize=9)
         ax.set_ylabel(f"energy ({prefix}{unit})", fontsize=8)
         ax.tick_params(labelsize=8)
@@ -793,6 +817,7 @@ def fig_block_energies(res: Results, arrays: Any, blocks: Sequence[int] | None =
             ax.plot(t, energies[key][:, b] / factor, lw=1.0, label=words)
         ax.plot(t, sum(e[:, b] for e in energies.values()) / factor, "k--", lw=0.8, label="sum of the three")
         ax.set(title=res.block_names[b], xlabel="time (s)", ylabel=f"energy ({prefix}{unit})")
+        mark_stages(ax, res, names=ax is axes.flat[0])
     for ax in axes.flat[len(chosen):]:
         ax.remove()
     fig.legend(*axes.flat[0].get_legend_handles_labels(), loc="outside upper center", ncols=2, fontsize="small",

@@ -9,9 +9,9 @@ the last recorded step, so a long run streamed to a file does not grow in memory
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -34,6 +34,33 @@ class Recorder(Protocol):
     def record(self, arrays: ModelArrays, state: State, solves: int, energy: Mapping[str, float]) -> None: ...
 
     def finish(self, status: str, state: State) -> None: ...
+
+
+def with_stage_row(rows: list[dict], index: int, entry: Mapping[str, object]) -> list[dict]:
+    """The stage table ``rows`` with the row of stage ``index`` (a stage began or ended): the rows of the stages
+    before it, then its own (a resumed run writes the rows of its stage and those after it again)."""
+    return [row for row in rows if row["index"] < index] + [{"index": index, **entry}]
+
+
+def reference_rows(steps: np.ndarray, stages: Sequence[Mapping[str, Any]]) -> np.ndarray:
+    """For every recorded row (its ``steps``), the row its displacements are measured from: the first row, or
+    the first row of the last stage begun by then that resets displacements (a staged run's ``stages`` table)."""
+    steps = np.asarray(steps)
+    out = np.zeros(len(steps), dtype=np.int64)
+    for row in stages:
+        at = np.flatnonzero(steps == row["first_step"])
+        if row["reset_displacements"] and len(at):
+            out[steps >= row["first_step"]] = at[0]
+    return out
+
+
+def removed_blocks(step: int, stages: Sequence[Mapping[str, Any]], n_blocks: int) -> np.ndarray:
+    """The blocks (bool, n_blocks) the stages begun by ``step`` removed (a staged run's ``stages`` table)."""
+    removed = np.zeros(n_blocks, dtype=bool)
+    for row in stages:
+        if row["first_step"] <= step:
+            removed[row["removed_blocks"]] = True
+    return removed
 
 
 def measured_points(arrays: ModelArrays, state: State) -> tuple[np.ndarray, np.ndarray]:
@@ -104,6 +131,11 @@ class Result:
     keep_vertices: bool = True  # False: no vertices history (a large model's memory)
     status: str = "running"
     final_state: State | None = None
+    stages: list[dict] = field(default_factory=list)  # a staged run's stage table (srdda.staging): one row a stage
+
+    def stage(self, index: int, entry: Mapping[str, object]) -> None:
+        """A stage of a staged run began or ended: its row of :attr:`stages`."""
+        self.stages = with_stage_row(self.stages, index, entry)
 
     def array(self, name: str) -> np.ndarray:
         """A history as one array (first axis = recorded step); ``energy`` has the columns :attr:`energy_names`."""

@@ -26,7 +26,7 @@ from .state import State, initial_state
 from .step import Stepper, default_terms, time_step_advice
 from .term import CUT_CAUSES, Term
 
-__all__ = ["run", "EnergyWarning", "TimeStepWarning"]
+__all__ = ["run", "run_single", "EnergyWarning", "TimeStepWarning"]
 
 
 class EnergyWarning(UserWarning):
@@ -42,6 +42,27 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
         stop: Callable[[State], bool] | None = None, keep_vertices: bool = True,
         extra_terms: Sequence[Term] = (), contact_law: ContactLaw | None = None) -> Result:
     """Run ``model`` for ``settings.n_steps`` steps or to ``settings.end_time``; pure (no global state).
+
+    A model with stages (``Model.stages``) runs them one after the other
+    (:func:`srdda.staging.run_stages`; ``stop`` is asked in its dynamic
+    stages and ends the whole run); one without runs as :func:`run_single`
+    describes.
+    """
+    arrays = model.arrays() if isinstance(model, Model) else model
+    if arrays.stages:
+        from .staging import run_stages  # the stages run this module's run_single
+
+        return run_stages(arrays, settings, progress, state, recorders, keep_history, keep_vertices, extra_terms,
+                          contact_law, stop)
+    return run_single(arrays, settings, progress, state, recorders, keep_history, stop, keep_vertices, extra_terms,
+                      contact_law)
+
+
+def run_single(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[int], None] | None = None,
+               state: State | None = None, recorders: Sequence[Recorder] = (), keep_history: bool = True,
+               stop: Callable[[State], bool] | None = None, keep_vertices: bool = True,
+               extra_terms: Sequence[Term] = (), contact_law: ContactLaw | None = None) -> Result:
+    """Run ``model`` (its stages left aside) for ``settings.n_steps`` steps or to ``settings.end_time``.
 
     Steps are recorded every ``settings.record_every`` steps (and the first and
     last) into the returned :class:`Result` and every extra ``recorders``.

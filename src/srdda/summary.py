@@ -5,7 +5,8 @@ It is computed after the run, with whole arrays, from the recorded histories
 :class:`~srdda.io.results_reader.StoredResult`) and the run's final state:
 the step cuts by cause (``State.cuts``), the largest centroid displacement and
 speed with the block and the time they were reached, the final kinetic
-energy, the energy balance error and the contacts' final states. Extremes are
+energy, the energy balance error, the contacts' final states and, for a staged
+run, each stage's end (steps, times, the unbalanced-force ratio reached). Extremes are
 taken over the recorded steps only (``record_every``); the step cuts over every
 step attempt.
 """
@@ -18,6 +19,7 @@ import numpy as np
 from .contact.openclose import LOCKED, OPEN, SLIDING
 from .kinematics.blocktype import block_type_of_dimension
 from .ledger import energy_in_play
+from .results import reference_rows
 from .state import State
 
 __all__ = ["run_summary", "format_summary"]
@@ -37,13 +39,18 @@ def run_summary(res: Results, final: State) -> dict[str, Any]:
     balance at the end minus its start, ``scale``: the largest energy in play
     over the recorded steps (:func:`srdda.ledger.energy_in_play`),
     ``relative_error``: their ratio, None when nothing moved); ``contacts``:
-    how many of the final contacts are open, sliding and locked.
+    how many of the final contacts are open, sliding and locked; ``stages`` (a staged run only): each stage's
+    name, kind, first and last step, steps, start and end time, status, and the unbalanced-force ratio of its
+    last step (an equilibrium stage: its tolerance and whether it was reached). A stage that resets
+    displacements measures the largest displacement from its start.
     """
     time, step = res.array("time"), res.array("step")
+    stages = list(getattr(res, "stages", ()))
     centroid = res.array("centroid")
     block_type = block_type_of_dimension(centroid.shape[-1])
     translation = block_type.translation
-    displacement = np.linalg.norm(centroid - centroid[0], axis=-1)  # (recorded steps, blocks)
+    # from the start, or from the start of the last stage that reset displacements (a staged run)
+    displacement = np.linalg.norm(centroid - centroid[reference_rows(step, stages)], axis=-1)  # (rows, blocks)
     speed = np.linalg.norm(res.array("velocity")[..., translation], axis=-1)
     energy = dict(zip(res.energy_names, res.array("energy").T))
     start = {name: float(values[0]) for name, values in energy.items()}
@@ -62,7 +69,15 @@ def run_summary(res: Results, final: State) -> dict[str, Any]:
             "final_kinetic_energy": float(energy["kinetic"][-1]), "energy_unit": "J/m" if block_type.dim == 2 else "J",
             "energy_balance": {"error": error, "scale": scale, "relative_error": error / scale if scale > 0 else None},
             "contacts": {name: int(np.count_nonzero(states == code))
-                         for name, code in (("open", OPEN), ("sliding", SLIDING), ("locked", LOCKED))}}
+                         for name, code in (("open", OPEN), ("sliding", SLIDING), ("locked", LOCKED))},
+            **({"stages": [_stage_end(row) for row in stages]} if stages else {})}
+
+
+def _stage_end(row: dict[str, Any]) -> dict[str, Any]:
+    """What the summary keeps of a stage's row: its name, kind, steps, times, status and the ratio it reached."""
+    keys = ("name", "kind", "first_step", "last_step", "steps", "start_time", "end_time", "status", "ratio",
+            "tolerance", "reached")
+    return {k: row[k] for k in keys if k in row}
 
 
 def format_summary(summary: dict[str, Any]) -> list[str]:
@@ -81,4 +96,20 @@ def format_summary(summary: dict[str, Any]) -> list[str]:
                  f"{balance['scale']:.6g} {unit})")
     c = summary["contacts"]
     lines.append(f"contacts at the end: {c['open']} open, {c['sliding']} sliding, {c['locked']} locked")
+    for stage in summary.get("stages", ()):
+        lines.append(format_stage(stage))
     return lines
+
+
+def format_stage(stage: dict[str, Any]) -> str:
+    """One line of a stage's end: its steps and times, and the unbalanced-force ratio it reached."""
+    if "last_step" not in stage:
+        return f"stage {stage['name']} ({stage['kind']}): began at step {stage['first_step']}, not ended"
+    ratio = "-" if stage.get("ratio") is None else f"{stage['ratio']:.3g}"
+    if stage["kind"] == "equilibrium":
+        verdict = "reached" if stage.get("reached") else "not reached"
+        ratio += f" ({verdict}: tolerance {stage['tolerance']:.3g})"
+    status = "" if stage["status"] == "completed" else f"; {stage['status']}"
+    return (f"stage {stage['name']} ({stage['kind']}): steps {stage['first_step']}-{stage['last_step']} "
+            f"({stage['steps']}), t = {stage['start_time']:.6g}-{stage['end_time']:.6g} s; unbalanced-force ratio "
+            f"{ratio}{status}")

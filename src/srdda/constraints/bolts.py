@@ -75,7 +75,7 @@ class BoltForces:
         k = links.bolt_stiffness
         initial = np.linalg.norm(links.bolt_axis, axis=1)
         self.rest = initial - links.bolt_pretension / k  # ℓr: the length at which the axial force is zero
-        self.intact = ~broken
+        self.intact = ~broken if links.bolt_active is None else ~broken & links.bolt_active  # not yet installed: none
         axis0 = links.bolt_axis / np.where(initial > 0, initial, 1.0)[:, None]
         self.across0 = np.eye(d.shape[1]) - np.einsum("ni,nj->nij", axis0, axis0)  # P0
         self.slip = np.einsum("nij,nj->ni", self.across0, d - links.bolt_axis)  # P0 (d - d0)

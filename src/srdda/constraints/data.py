@@ -139,6 +139,7 @@ class ConstraintArrays:
     bolt_strength: np.ndarray = field(default_factory=lambda: np.zeros(0))  # inf: never breaks
     bolt_shear_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
     bolt_names: tuple[str, ...] = ()
+    bolt_active: np.ndarray | None = None  # (n,) bool: installed (a staged analysis installs bolts); None: all
 
     def __post_init__(self) -> None:
         for name, dtype in (("spring_offset", float), ("prescribed_mask", bool), ("bolt_ground", float),

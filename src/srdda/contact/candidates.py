@@ -81,8 +81,9 @@ class PairFinder:
     """The broad phase of a model's contacts: kept candidate pairs (above) less the hinged ones.
 
     Blocks joined by a hinge turn about a shared point: their faces are not
-    joints, so their pairs never make contacts. ``can_touch`` marks the blocks
-    some other block may touch (the step control bounds only their vertices).
+    joints, so their pairs never make contacts; nor do the pairs of a block a
+    stage removed (excavated). ``can_touch`` marks the blocks some other block
+    may touch (the step control bounds only their vertices).
     ``find(boxes, distance)`` is the dimension's broad phase.
     """
 
@@ -92,7 +93,10 @@ class PairFinder:
         self.excluded = np.unique(pair_keys(arrays.links.hinged_block_pairs, arrays.n_blocks))
         first, second = np.divmod(self.excluded, arrays.n_blocks)
         partners_left_out = np.bincount(np.concatenate([first, second]), minlength=arrays.n_blocks)
+        self.removed = arrays.block_removed  # excavated by a stage: its pairs make no contacts
         self.can_touch = partners_left_out < arrays.n_blocks - 1
+        if self.removed is not None:
+            self.can_touch &= ~self.removed
         movable = ~arrays.block_fixed
         # the broad phase with a margin of d0, run again once a vertex has moved d0/2
         self.candidates = KeptCandidates(lambda boxes, d: find(boxes, d, movable), distance, distance)
@@ -103,6 +107,8 @@ class PairFinder:
         pairs = self.candidates(vertices, boxes)
         if len(self.excluded):
             pairs = pairs[~np.isin(pair_keys(pairs, self.n_blocks), self.excluded)]
+        if self.removed is not None:
+            pairs = pairs[~np.any(self.removed[pairs], axis=1)]
         return boxes, pairs
 
 

@@ -27,7 +27,9 @@ from ..geometry.polyhedron import PolyhedronError, box
 from ..model import JointMaterial, Load, Material, Model, ModelError
 from ..settings import RunSettings
 from .records import RecordError, record_history
-from .schema import BaseAccelerationSection, BlockSection, CuttingSection, HistorySection, ModelFile
+from ..stages import Stage, resolve_stages
+from .schema import (BaseAccelerationSection, BlockSection, CuttingSection, HistorySection, JointMaterialSection,
+                     ModelFile, StageSection)
 
 __all__ = ["ModelFileError", "load_model", "read_model_text", "model_from_dict", "save_model", "model_to_dict",
            "format_validation", "cut_section"]
@@ -101,9 +103,7 @@ def _build(spec: ModelFile, source: str, base_dir: Path) -> tuple[Model, RunSett
     for name, m in spec.materials.items():
         model.add_material(name, Material(m.density, m.young, m.poisson, m.plane))
     for name, j in spec.joint_materials.items():
-        model.add_joint_material(name, JointMaterial(j.friction_angle, j.cohesion, j.tensile_strength,
-                                                     j.normal_stiffness, j.shear_stiffness, j.restitution),
-                                  j.between)
+        model.add_joint_material(name, _joint_material(j), j.between)
     names: dict[str, int] = {}
     for i, b in enumerate(spec.blocks):
         label = b.name or f"block {i}"
@@ -149,9 +149,32 @@ def _build(spec: ModelFile, source: str, base_dir: Path) -> tuple[Model, RunSett
         if spec.water is not None:
             w = spec.water
             model.set_water(w.level, w.point, w.normal, w.unit_weight, [(c.point, c.normal, c.depth) for c in w.cracks])
+        for k, stage in enumerate(spec.stages):
+            model.add_stage(_stage(stage, model.dim, base_dir, f"{source}: stages[{k}]"))
+        resolve_stages(model, model.stages)  # the names they give, checked now
     except ModelError as exc:
         raise ModelFileError(f"{source}: {exc}") from None
     return model, spec.run
+
+
+def _joint_material(j: JointMaterialSection) -> JointMaterial:
+    return JointMaterial(j.friction_angle, j.cohesion, j.tensile_strength, j.normal_stiffness, j.shear_stiffness,
+                         j.restitution)
+
+
+def _stage(section: StageSection, dim: int, base_dir: Path, where: str) -> Stage:
+    """A ``[[stages]]`` table as a :class:`Stage` (its names are checked against the model by the caller)."""
+    for name, j in section.joint_materials.items():
+        if j.between:
+            raise ModelFileError(f"{where}.joint_materials.{name}.between: a stage changes a joint material's "
+                                 "properties, not the materials it joins")
+    base = None if section.base_acceleration is None else _base_acceleration(section.base_acceleration, dim,
+                                                                               base_dir, where)
+    return Stage(section.name, section.kind, section.remove_blocks, section.install_bolts, section.fix_blocks,
+                 section.free_blocks, base,
+                 {n: Material(m.density, m.young, m.poisson, m.plane) for n, m in section.materials.items()},
+                 {n: _joint_material(j) for n, j in section.joint_materials.items()}, section.run,
+                 section.tolerance, section.max_steps, section.reset_displacements, section.water_level)
 
 
 def _add_block(model: Model, b: BlockSection, label: str) -> None:
@@ -271,7 +294,7 @@ def _add_links(model: Model, spec: ModelFile, names: dict[str, int], n: int, whe
 
 
 def _base_acceleration(section: BaseAccelerationSection, dim: int, base_dir: Path, source: str) -> MotionHistory:
-    """The ground acceleration: a record file (srdda.io.records) or a history."""
+    """The ground acceleration: a record file (srdda.io.records) or a history; ``source`` starts the messages."""
     record_options = {"format": None, "units": None, "scale": 1.0, "baseline": "none", "components": None}
     if section.record is None:
         given = [k for k, default in record_options.items() if getattr(section, k) != default]
@@ -437,6 +460,29 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
         out["water"] = {"point": list(w.point), "normal": list(w.normal), "unit_weight": w.unit_weight,
                         "cracks": [{"point": list(c.point), "normal": list(c.normal), "depth": c.depth}
                                    for c in w.cracks]}
+    if model.stages:
+        out["stages"] = [_stage_dict(stage) for stage in model.stages]
+    return out
+
+
+def _stage_dict(stage: Stage) -> dict[str, Any]:
+    """A ``[[stages]]`` table of a stage (what it leaves at its default is left out)."""
+    out: dict[str, Any] = {"name": stage.name, "kind": stage.kind}
+    for key in ("remove_blocks", "install_bolts", "fix_blocks", "free_blocks"):
+        if getattr(stage, key):
+            out[key] = list(getattr(stage, key))
+    if stage.base_acceleration is not None:
+        out["base_acceleration"] = _history_dict(stage.base_acceleration, f"stage {stage.name!r}'s base acceleration")
+    if stage.materials:
+        out["materials"] = {n: dataclasses.asdict(m) for n, m in stage.materials.items()}
+    if stage.joint_materials:
+        out["joint_materials"] = {n: {k: v for k, v in dataclasses.asdict(j).items() if v is not None}
+                                  for n, j in stage.joint_materials.items()}
+    if stage.run:
+        out["run"] = {("steps" if k == "n_steps" else k): v for k, v in stage.run.items()}
+    out.update(tolerance=stage.tolerance, max_steps=stage.max_steps, reset_displacements=stage.reset_displacements)
+    if stage.water_level is not None:
+        out["water_level"] = stage.water_level
     return out
 
 

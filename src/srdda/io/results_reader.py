@@ -35,6 +35,7 @@ from ..integrators.methods import METHODS
 from ..ledger import ENERGY_NAMES
 from ..model import JointTable, Load, ModelArrays
 from ..settings import RunSettings
+from ..stages import StagePlan
 from ..state import State
 from .checkpoint import CheckpointVersionError, intact_checkpoints, read_checkpoint
 from .integrity import (CutShortFile, DamagedError, describe_error, ordered_prefix, read_attr, read_intact,
@@ -209,6 +210,8 @@ def _model_arrays(g: h5py.Group, path: str | Path) -> ModelArrays:
             table = g["joint_properties"][()]
             nan = np.full(len(table), np.nan)
             kwargs["joints"] = JointTable(table[:, 0], table[:, 1], table[:, 2], nan, nan.copy(), nan.copy())
+        elif f_.name == "stages":  # the resolved stages of a staged run (srdda.stages)
+            kwargs["stages"] = stage_plans(g)
         elif f_.name in g:
             kwargs[f_.name] = g[f_.name][()]
         elif f_.default is None:  # an optional array (face_joint: 3D faces naming joint materials)
@@ -217,6 +220,18 @@ def _model_arrays(g: h5py.Group, path: str | Path) -> ModelArrays:
             raise ResultsFileError(f"{path}: the stored model lacks field {f_.name!r} (written by another "
                                    "srdda version?); pass the model to resume(..., model=...)")
     return ModelArrays(**kwargs)
+
+
+def stage_plans(g: h5py.Group) -> tuple[StagePlan, ...]:
+    """The resolved stages stored with the model ``g`` (() for a run without stages)."""
+    if "stages" not in g.attrs:
+        return ()
+    return tuple(StagePlan.from_json(plan) for plan in read_json(g, "stages", list))
+
+
+def stage_table(f: h5py.File) -> list[dict]:
+    """The stage table of a results file: one row per stage begun (name, kind, first step, ...; [] without)."""
+    return read_json(f, "stages", list) if "stages" in f.attrs else []
 
 
 def _check_model(g: h5py.Group) -> list[str]:
@@ -415,6 +430,7 @@ class StoredResult:
     versions: dict[str, str]
     bolt_names: tuple[str, ...] = ()
     damage: str | None = None  # one line naming what is damaged and the last intact step; None: intact
+    stages: list[dict] = dataclasses.field(default_factory=list)  # the stage table of a staged run (srdda.staging)
 
     @property
     def mesh(self) -> PolyhedronMesh | None:
@@ -471,6 +487,10 @@ def read_results(path: str | Path, names: Sequence[str] | None = None) -> Stored
             model_text = read_text(g, "model_text") if "model_text" in g.attrs else None
         except DamagedError:
             model_text = None
+        try:
+            stages = stage_table(f)
+        except DamagedError as exc:
+            raise _damaged(path, f"the stage table ({exc})") from None
     damage = found.message(path)
     if damage is not None:
         warnings.warn(damage, ResultsDamageWarning, stacklevel=2)
@@ -479,7 +499,7 @@ def read_results(path: str | Path, names: Sequence[str] | None = None) -> Stored
         settings=header.settings, histories=found.histories, energy_names=found.energy_names,
         block_ptr=model["block_ptr"], block_material=model["block_material"], block_fixed=model["block_fixed"],
         initial_vertices=model["vertices"], contacts=found.contacts, model_text=model_text, versions=found.versions,
-        bolt_names=bolt_names, damage=damage)
+        bolt_names=bolt_names, damage=damage, stages=stages)
 
 
 def load_checkpoint(path: str | Path, arrays: ModelArrays) -> State:

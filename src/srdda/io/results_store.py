@@ -70,7 +70,7 @@ import numpy as np
 from ..constraints.data import links_to_flat
 from ..model import Model, ModelArrays
 from ..ledger import ENERGY_NAMES
-from ..results import Result, bolt_histories, measured_points
+from ..results import Result, bolt_histories, measured_points, with_stage_row
 from ..settings import RunSettings
 from ..simulation import run
 from ..state import State, initial_state
@@ -79,7 +79,7 @@ from .integrity import LIBVER, DamagedError, checksummed, read_text, write_text
 from .outputlock import OutputInUseError, ResultsWriteError, release_lock, take_lock
 from .results_reader import (FORMAT, FORMAT_VERSION, Intact, ResultsDamageWarning, ResultsFileError,
                              ResultsInUseError, StoredResult, checkpoint_state, inspect_results, load_checkpoint,
-                             model_arrays_from_file, open_results, read_header, read_results)
+                             model_arrays_from_file, open_results, read_header, read_results, stage_table)
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "ContactProvider", "contacts_from_state", "ResultsStore", "ResultsFileError",
            "ResultsWriteError", "ResultsDamageWarning", "ResultsInUseError", "OutputInUseError", "OutputExistsError",
@@ -198,7 +198,10 @@ def _append(group: h5py.Group, name: str, rows: np.ndarray, chunk_rows: int) -> 
 
 
 def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None) -> None:
-    """Every array field of ``arrays`` as a dataset; names, loads and the model text as attributes (checksummed)."""
+    """Every array field of ``arrays`` as a dataset; names, loads, stages and the model text as attributes
+    (checksummed). A stage's arrays store the model as built (``arrays.base``)."""
+    arrays = arrays.base if arrays.base is not None else arrays
+
     def dataset(name: str, value: np.ndarray) -> None:
         value = np.asarray(value)
         group.create_dataset(name, data=value, **checksummed(value))
@@ -220,6 +223,8 @@ def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None)
     write_text(group, "loads", json.dumps([ld.to_json() for ld in arrays.loads]))
     if model_text is not None:
         write_text(group, "model_text", model_text)
+    if arrays.stages:
+        write_text(group, "stages", json.dumps([plan.to_json() for plan in arrays.stages]))
 
 
 @dataclass(frozen=True)
@@ -278,6 +283,7 @@ class ResultsStore:
     _pending: int = field(default=0, init=False, repr=False)
     _last_step: int = field(default=-1, init=False, repr=False)
     _state: State | None = field(default=None, init=False, repr=False)
+    stage_table: list[dict] = field(default_factory=list, init=False, repr=False)  # rows of the stages begun
 
     def __post_init__(self) -> None:
         self.path = Path(self.path)
@@ -311,6 +317,10 @@ class ResultsStore:
         self._pending += 1
         if self._pending >= self.flush_every:
             self.flush()
+
+    def stage(self, index: int, entry: Mapping[str, object]) -> None:
+        """A stage of a staged run began or ended: its row of the stage table (written at the next flush)."""
+        self.stage_table = with_stage_row(self.stage_table, index, entry)
 
     def finish(self, status: str, state: State) -> None:
         """Write what is buffered, a final checkpoint and the status; close the file and release it."""
@@ -477,6 +487,8 @@ class ResultsStore:
                     _append(c, name, rows, 4096)
             for group in (hist, c):  # what a damaged file would lack
                 write_text(group, "datasets", json.dumps(sorted(group)))
+            if self.stage_table:
+                write_text(f, "stages", json.dumps(self.stage_table))
             if new_checkpoint:
                 append_checkpoint(cp, self._state, commit=False)
             f.flush()
@@ -522,13 +534,18 @@ class ResultsStore:
         if point is not None and point.copy is None:
             self._file = h5py.File(self.path, "a")
             self._last_step = _cut_back(self._file, point)
+            rows = stage_table(self._file)  # the rows of the stages before the resumed one, then the run's
+            for row in self.stage_table:
+                rows = with_stage_row(rows, row["index"], row)
+            self.stage_table = rows
             write_text(self._file, "status", "running")
             self._file.attrs["flush_every"] = self.flush_every
             return
         if self.path.exists():  # unlink, never truncate: a reader of the old file keeps its copy
             self.path.unlink()
         f = self._file = h5py.File(self.path, "w-", libver=LIBVER)
-        last_step = -1 if self.settings.n_steps is None else state.step + self.settings.n_steps
+        staged = bool((arrays.base if arrays.base is not None else arrays).stages)  # the stages say where it ends
+        last_step = -1 if self.settings.n_steps is None or staged else state.step + self.settings.n_steps
         if point is not None:  # a damaged file rewritten: the run keeps its end
             last_step = point.last_step
         f.attrs.update({"format_version": FORMAT_VERSION, "last_step": last_step, "flush_every": self.flush_every,
@@ -729,6 +746,10 @@ def _prepare(path: Path, store: ResultsStore, model: Model | ModelArrays | None)
                 problems.append(str(exc).removeprefix(f"{path}: "))
         if problems and state is not None:  # the intact rows to copy into a new file
             found = inspect_results(f, path)
+            try:
+                store.stage_table = stage_table(f)
+            except DamagedError:  # the resumed run writes the rows of its stages again
+                store.stage_table = []
     settings = header.settings
     start = -1 if state is None else state.step
     if state is None:

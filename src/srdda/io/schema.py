@@ -17,7 +17,7 @@ __all__ = ["ModelFile", "MaterialSection", "BlockSection", "PointRef", "FixedPoi
            "PointLoadSection", "PointSpringSection", "MeasuredPointSection", "JointMaterialSection",
            "HingeSection", "PinSection", "SpringSection", "HistorySection", "PrescribedMotionSection",
            "BaseAccelerationSection", "BoltSection", "WaterSection", "CrackSection",
-           "CuttingSection", "CutDomainSection", "JointSetSection", "JointSection"]
+           "CuttingSection", "CutDomainSection", "JointSetSection", "JointSection", "StageSection"]
 
 
 def _unit(kind: str) -> BeforeValidator:
@@ -253,6 +253,25 @@ class CuttingSection(_Strict):
     fixed_box: tuple[Point3, Point3] | None = None  # blocks whose centroid lies in this box are fixed
 
 
+class StageSection(_Strict):
+    """One stage of a staged analysis (srdda.stages.Stage): its kind and what changes at its start."""
+
+    name: str = Field(min_length=1)
+    kind: Literal["equilibrium", "dynamic"] = "dynamic"
+    remove_blocks: list[str] = []  # names or shell patterns ("tunnel*")
+    install_bolts: list[str] = []  # names of [[bolts]]: inactive until this stage
+    fix_blocks: list[str] = []
+    free_blocks: list[str] = []
+    base_acceleration: BaseAccelerationSection | None = None  # its time 0 is the stage's start
+    materials: dict[str, MaterialSection] = {}  # new properties of named materials
+    joint_materials: dict[str, JointMaterialSection] = {}  # new properties of named joint materials
+    run: dict[str, object] = {}  # [run] fields for this stage; steps and end_time count from its start
+    tolerance: float = Field(1e-5, gt=0)  # an equilibrium stage: the unbalanced-force ratio to reach
+    max_steps: int = Field(20000, ge=1)  # an equilibrium stage: the most steps it takes
+    reset_displacements: bool = False
+    water_level: Length | None = None  # the phreatic surface moved to this elevation (docs/water.md)
+
+
 class ModelFile(_Strict):
     """The whole model file."""
 
@@ -276,3 +295,4 @@ class ModelFile(_Strict):
     base_acceleration: BaseAccelerationSection | None = None
     bolts: list[BoltSection] = []
     water: WaterSection | None = None
+    stages: list[StageSection] = []

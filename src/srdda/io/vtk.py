@@ -27,6 +27,7 @@ import numpy as np
 from ..contact.openclose import SLIDING
 from ..geometry.polyhedron import PolyhedronMesh
 from ..kinematics.blocktype import SOLID
+from ..results import reference_rows, removed_blocks
 from .results_reader import open_results
 from .results_store import StoredResult, read_results
 
@@ -236,6 +237,18 @@ def contact_fields(contacts: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
     return out
 
 
+def stage_fields(res: StoredResult, i: int) -> tuple[int, np.ndarray, np.ndarray]:
+    """Of recorded row ``i`` of a staged run: its stage (-1 before any, or without stages), the blocks the
+    stages begun by then removed, and the vertices its displacements are measured from (those at the start of
+    the last stage begun that resets displacements; the initial ones without)."""
+    step = int(res.step[i])
+    begun = [row for row in res.stages if row["first_step"] <= step]
+    removed = removed_blocks(step, res.stages, len(res.block_names))
+    at = int(reference_rows(res.step, res.stages)[i])
+    reference = np.asarray(res.initial_vertices if at == 0 else res.vertices[at], dtype=float)
+    return (begun[-1]["index"] if begun else -1), removed, reference
+
+
 def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, every: int | None = None,
                      contacts: ContactSeries | None = None, prefix: str = "blocks",
                      progress: Callable[[], None] | None = None) -> dict[str, Path]:
@@ -271,13 +284,16 @@ def write_vtu_series(results: StoredResult | str | Path, directory: str | Path, 
     for i in series_rows(len(res.step), every):
         name = f"{prefix}_{int(res.step[i]):07d}.vtu"
         extra = block_fields(res.stress[i], fields)
+        stage, removed, reference = stage_fields(res, i)
+        if res.stages:
+            extra.update(stage=np.full(len(res.block_names), stage), removed=removed.astype(np.int64))
         if solids is not None:
             mesh = solid_blocks_mesh(res.vertices[i], solids, res.velocity[i], res.stress[i], res.block_material,
                                      res.area[i], area0, res.block_fixed, extra)
         else:
             mesh = blocks_mesh(res.vertices[i], res.block_ptr, res.velocity[i], res.stress[i], res.block_material,
                                res.area[i], area0, res.block_fixed, extra)
-        displacement = np.asarray(res.vertices[i], dtype=float) - res.initial_vertices
+        displacement = np.asarray(res.vertices[i], dtype=float) - reference
         mesh.point_data["displacement"] = _xyz(displacement) if displacement.shape[-1] == 2 else displacement
         _write(mesh, out / name)
         block_files.append(name)
