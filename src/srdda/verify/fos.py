@@ -94,13 +94,12 @@ def fos_wedge_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
                 "srdda", factor_of_safety(cohesive, WEDGE_SETTINGS).factor_of_safety, short_solution, None)]
 
 
-
 # ---------------------------------------------------------------------------------------------
 # fos-plane-wet-2d: fos-plane-2d's slope with Hoek & Bray's water (srdda.cases.plane_failure.set_hoek_bray_water):
 # the tension crack filled to its top, z_w = 1.663 m (the most water their model puts in this slope), the
 # phreatic line from the crack's water surface to the toe: U = ½γ_w·z_w·A = 168.6 kN/m, V = ½γ_w·z_w² =
 # 13.6 kN/m, FS 1.2092 dry → 1.1170 wet (−7.6 %). The model's water forces at the start equal U and V: the
-# contacts' shares of the base's exact wetted integral and the crack face's (round-off, measured 8.9e-16 and 0).
+# contacts' shares of the base's exact wetted integral and the crack face's (round-off, measured 8.6e-16 and 0).
 # srdda fos measured 0.5 % low: V acts a third of the way up the crack's water, off the plane, and its moment
 # about the plane's middle (78 kN·m/m) leaves the heel's contact 7.5 kN/m less compressed than the toe's, so
 # the heel loses its cohesion first (0.3 % of the resisting force; with c = 0, φ = 35° the same water gives
