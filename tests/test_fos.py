@@ -9,11 +9,14 @@ import pytest
 from click.testing import CliRunner
 
 from srdda import JointMaterial, Material, Model, RunSettings
-from srdda.cases.plane_failure import (PLANE_FAILURE, plane_failure_factor, plane_failure_model,
-                                       plane_failure_water_forces)
+from srdda.cases.plane_failure import (BASE_LENGTH, PLANE_DIP, PLANE_FAILURE, plane_failure_factor,
+                                       plane_failure_model, plane_failure_water_forces, set_hoek_bray_water,
+                                       wet_plane_forces, wet_plane_model)
 from srdda.cases.slope3d import (WEDGE_PLANES, HoekBrayAngles, hoek_bray_wedge_angles,
-                                 hoek_bray_wedge_factor_of_safety, wedge_friction_for, wedge_model, wedge_solution,
-                                 wedge_vertices)
+                                 hoek_bray_wedge_factor_of_safety, wedge_faces, wedge_friction_for, wedge_model,
+                                 wedge_solution, wedge_vertices, wedge_water_forces, wet_wedge_factor_of_safety)
+from srdda.constraints.water import UNIT_WEIGHT
+from srdda.geometry.jointsets3d import plane_normal
 from srdda.cli import main
 from srdda.fos import FailureCriterion, FosError, factor_of_safety, judge, reduce_strength, settle_dt, try_factor
 from srdda.io.modelfile import save_model
@@ -91,6 +94,44 @@ def test_hoek_bray_wedge_with_cohesion_and_water_equals_the_tetrahedron():
               + (s.normal_b * weight - ub) * math.tan(math.radians(pb))) / (weight * math.sin(math.radians(s.plunge)))
     ours = hoek_bray_wedge_factor_of_safety(hoek_bray_wedge_angles(), h, pa, pb, ca, cb, gamma, gamma_w)
     assert ours == pytest.approx(direct, rel=1e-12)
+    # the wet wedge's closed form with Hoek & Bray's uplift (its γ is the wedge model's rock, 2600 × 9.81)
+    assert wet_wedge_factor_of_safety(pa, pb, ua, ub, h, ca, cb) == pytest.approx(ours, rel=1e-12)
+    assert wedge_faces(h) == pytest.approx((sa, sb, weight / gamma), rel=1e-12)
+
+
+def test_wet_wedge_against_the_force_equilibrium():
+    # independent route: the wedge's equilibrium solved as 3 equations, R_A n_A + R_B n_B − S l = W e_z (R: the
+    # planes' whole normal reactions, S: the shear along the line of intersection l, pointing down), the
+    # effective normal forces R − U; with cohesion and unequal friction: the same numbers to round-off
+    h, pa, pb, ca, cb, level = 6.0, 30.0, 40.0, 3e3, 8e3, 2.5
+    sa, sb, volume = wedge_faces(h)
+    weight = 2600.0 * 9.81 * volume
+    na, nb = plane_normal(*WEDGE_PLANES[0]), plane_normal(*WEDGE_PLANES[1])
+    line = np.cross(na, nb)
+    line = -line / np.linalg.norm(line) if line[2] > 0 else line / np.linalg.norm(line)
+    ra, rb, shear = np.linalg.solve(np.column_stack([na, nb, -line]), [0.0, 0.0, weight])
+    ua, ub = wedge_water_forces(level, h)
+    resisting = (ra - ua) * math.tan(math.radians(pa)) + (rb - ub) * math.tan(math.radians(pb)) + ca * sa + cb * sb
+    direct = resisting / shear
+    assert wet_wedge_factor_of_safety(pa, pb, ua, ub, h, ca, cb) == pytest.approx(direct, rel=1e-12)
+
+
+def test_wedge_water_forces_by_hand():
+    # H = 6 m; a face's corners at z = 0 (toe), 6, 6: its centroid at z = 4. Level 9 m (above the face):
+    # U = γ_w S (9 − 4) = 5 γ_w S. Level 3 m: the wet triangle is the face scaled by ½ (area S/4, centroid at
+    # z = 2): U = γ_w (S/4)(3 − 2) = γ_w S/4. At the level of the top both give γ_w S·2. Dry below the toe.
+    sa, sb, _ = wedge_faces(6.0)
+    for level, head in ((9.0, 5.0), (3.0, 0.25), (6.0, 2.0)):
+        assert wedge_water_forces(level, 6.0) == pytest.approx((UNIT_WEIGHT * sa * head, UNIT_WEIGHT * sb * head),
+                                                               rel=1e-14)
+    assert wedge_water_forces(-1.0, 6.0) == (0.0, 0.0)
+
+
+def test_plane_failure_model_takes_hoek_bray_water_up_to_the_crack_depth():
+    model = plane_failure_model(PLANE_FAILURE, water_depth=1.0)
+    assert model.water is not None and model.water.cracks[0].depth == 1.0
+    with pytest.raises(ValueError, match="water_depth"):
+        plane_failure_model(PLANE_FAILURE, water_depth=PLANE_FAILURE.crack_depth * 1.01)
 
 
 # -- strength reduction and the criterion ----------------------------------------------------------------
@@ -138,7 +179,7 @@ def test_a_model_that_cannot_fail_is_an_error():
 
 
 # -- the acceptance: verify cases ------------------------------------------------------------------------
-@pytest.mark.parametrize("name", ["fos-plane-2d", "fos-wedge-3d"])
+@pytest.mark.parametrize("name", ["fos-plane-2d", "fos-wedge-3d", "fos-plane-wet-2d", "fos-wedge-wet-3d"])
 def test_verify_case_passes(name):
     rows = run_case(name)
     checked = [r for r in rows if r["passed"] is not None]
@@ -167,6 +208,21 @@ def test_cli_fos(tmp_path):
     assert data["failed"] - data["stable"] <= 0.02 * data["stable"]
     bad = CliRunner().invoke(main, ["fos", str(path), "--joint", "nope"])
     assert bad.exit_code == 2 and "unknown joint material 'nope'" in bad.output and "Traceback" not in bad.output
+
+
+def test_cli_fos_of_a_wet_model_file(tmp_path):
+    # water-plane-2d's block (φ = 40°) with Hoek & Bray's water, the crack 0.5 m deep, through a model file with
+    # [water]: FS = 1.182 by the closed form (1.453 dry), and srdda fos finds it within the acceptance's 2 %
+    model = wet_plane_model(40.0)
+    set_hoek_bray_water(model, 0.5)
+    path = tmp_path / "wet.toml"
+    save_model(model, RunSettings(dt=1e-3, n_steps=1, penalty=1e10), path)
+    assert "[water]" in path.read_text() and "[[water.cracks]]" in path.read_text()
+    weight, _, _, _ = wet_plane_forces(None, 0.0)
+    exact = plane_failure_factor(weight, PLANE_DIP, 40.0, *plane_failure_water_forces(BASE_LENGTH, 0.5))
+    result = CliRunner().invoke(main, ["fos", str(path), "--tolerance", "0.01", "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.output)["factor_of_safety"] == pytest.approx(exact, rel=0.02)
 
 
 def test_a_failing_wedge_moves_half_its_unbalanced_acceleration_per_static_step():

@@ -103,11 +103,14 @@ def wet_plane_forces(head: float | None, crack_depth: float) -> tuple[float, flo
     return mass * PLANE_G, mass, uplift, crack
 
 
-def set_hoek_bray_water(model: Model, crack_depth: float) -> None:
-    """Hoek & Bray's water on :func:`wet_plane_model`'s block: the crack filled ``crack_depth`` (z_w) deep and
-    the phreatic line from its water surface to the toe, so the pressure on the sliding plane falls linearly
-    from γ_w·z_w at the crack to 0 at the toe (U = ½γ_w·z_w·L, V = ½γ_w·z_w²)."""
-    toe, bottom = _corners()[0], _corners()[1]
+def set_hoek_bray_water(model: Model, crack_depth: float, block: np.ndarray | None = None) -> None:
+    """Hoek & Bray's water on a plane-failure block: the crack filled ``crack_depth`` (z_w) deep and the phreatic
+    line from its water surface to the toe, so the pressure on the sliding plane falls linearly from γ_w·z_w at
+    the crack to 0 at the toe (U = ½γ_w·z_w·L, V = ½γ_w·z_w²). ``block``: the sliding block's corners, its toe
+    first and the foot of its vertical crack second (:meth:`PlaneFailure.vertices`); None: the block of
+    :func:`wet_plane_model`."""
+    corners = _corners() if block is None else np.asarray(block, dtype=float)
+    toe, bottom = corners[0], corners[1]
     rise = bottom[1] + crack_depth - toe[1]
     model.set_water(point=toe, normal=(-rise, bottom[0] - toe[0]), unit_weight=UNIT_WEIGHT,
                     cracks=[(bottom, (1.0, 0.0), crack_depth)])
@@ -184,6 +187,11 @@ class PlaneFailure:
         v = self.vertices()
         return float(v[2, 1] - v[1, 1])
 
+    def water_forces(self, water_depth: float) -> tuple[float, float]:
+        """(U, V) (N/m) of Hoek & Bray's water, the crack filled ``water_depth`` z_w deep
+        (:func:`plane_failure_water_forces` over this block's sliding plane)."""
+        return plane_failure_water_forces(self.length, water_depth)
+
     def factor_of_safety(self, uplift: float = 0.0, crack_force: float = 0.0) -> float:
         """Hoek & Bray's FS of this block (dry unless water forces are given)."""
         return plane_failure_factor(self.weight, self.plane, self.friction, uplift, crack_force, self.cohesion,
@@ -197,14 +205,19 @@ def _moments(v: np.ndarray) -> BlockMoments:
     return block_moments(v, np.array([0, len(v)]))
 
 
-def plane_failure_model(case: PlaneFailure = PLANE_FAILURE, young: float = 10e9) -> Model:
+def plane_failure_model(case: PlaneFailure = PLANE_FAILURE, young: float = 10e9,
+                        water_depth: float | None = None) -> Model:
     """The sliding block ("block") on the fixed rock under the plane ("rock"), joint "plane" between them.
 
     The rock is a slab 5 m deep whose top is the sliding plane, from 2 m before
     the toe to 3 m behind the crack; the crack face and the slope face touch
-    nothing (a dry crack carries no force).
+    nothing (a dry crack carries no force). ``water_depth`` z_w: Hoek & Bray's
+    water (:func:`set_hoek_bray_water`), the crack filled z_w deep (at most its
+    depth) and the phreatic line from there to the toe; None: dry.
     """
     v = case.vertices()
+    if water_depth is not None and not 0.0 <= water_depth <= case.crack_depth:
+        raise ValueError(f"water_depth: must lie in [0, {case.crack_depth:g}] m (the crack's depth), got {water_depth}")
     tp = np.tan(np.radians(case.plane))
     x0, x1 = -2.0, float(v[1, 0]) + 3.0
     model = Model(gravity=(0.0, -G))
@@ -215,4 +228,6 @@ def plane_failure_model(case: PlaneFailure = PLANE_FAILURE, young: float = 10e9)
     model.add_block(v.tolist(), "block", name="block")
     model.add_block([[x0, x0 * tp - 5.0], [x1, x1 * tp - 5.0], [x1, x1 * tp], [x0, x0 * tp]], "rock", name="rock",
                     fixed=True)
+    if water_depth is not None:
+        set_hoek_bray_water(model, water_depth, v)
     return model

@@ -40,13 +40,15 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..constraints.water import UNIT_WEIGHT
 from ..geometry.cutting3d import halfspace_polyhedron
 from ..geometry.jointsets3d import plane_normal
 from ..geometry.polyhedron import box
 from ..model import JointMaterial, Material, Model
 
 __all__ = ["G", "HoekBrayAngles", "hoek_bray_wedge_angles", "hoek_bray_wedge_factor_of_safety",
-           "wedge_vertices", "SLIDE_TOPPLE_CASES", "SlideToppleCase", "WedgeSolution", "block_on_incline_model",
+           "wedge_vertices", "wedge_faces", "wedge_water_forces", "wet_wedge_factor_of_safety", "SLIDE_TOPPLE_CASES",
+           "SlideToppleCase", "WedgeSolution", "block_on_incline_model",
            "incline_acceleration", "slide_topple_mode", "slide_topple_model", "toppling_angular_acceleration",
            "wedge_friction_for", "wedge_model", "wedge_solution", "WEDGE_PLANES", "WEDGE_FACE"]
 
@@ -322,6 +324,63 @@ def wedge_vertices(height: float, plane_a: tuple[float, float] = WEDGE_PLANES[0]
         return np.linalg.solve(np.array([n, nf, ez]), np.array([0.0, 0.0, height]))
 
     return {"toe": np.zeros(3), "top": line * (height / line[2]), "crest A": meet(na), "crest B": meet(nb)}
+
+
+def wedge_faces(height: float, plane_a: tuple[float, float] = WEDGE_PLANES[0],
+                plane_b: tuple[float, float] = WEDGE_PLANES[1], face: tuple[float, float] = WEDGE_FACE
+                ) -> tuple[float, float, float]:
+    """(S_A, S_B, V): the areas (m²) of the wedge's faces on planes A (toe, top, crest A) and B (toe, top,
+    crest B) and its volume (m³), from :func:`wedge_vertices`."""
+    v = wedge_vertices(height, plane_a, plane_b, face)
+    toe, top = v["toe"], v["top"]
+
+    def area(crest: np.ndarray) -> float:
+        return 0.5 * float(np.linalg.norm(np.cross(top - toe, crest - toe)))
+
+    volume = abs(float(np.dot(top - toe, np.cross(v["crest A"] - toe, v["crest B"] - toe)))) / 6.0
+    return area(v["crest A"]), area(v["crest B"]), volume
+
+
+def wedge_water_forces(level: float, height: float = 6.0, plane_a: tuple[float, float] = WEDGE_PLANES[0],
+                       plane_b: tuple[float, float] = WEDGE_PLANES[1], face: tuple[float, float] = WEDGE_FACE,
+                       gamma_water: float = UNIT_WEIGHT) -> tuple[float, float]:
+    """(U_A, U_B) (N): the hydrostatic water forces on the wedge's faces on planes A and B under a horizontal
+    water ``level`` (m above the toe), each normal to its plane.
+
+    Each face is a triangle with its corner at the toe (z = 0) and its other two
+    corners at the top (z = H). Under a level L ≥ H the whole face is wet and
+    U = γ_w·S·(L − z_c), z_c = 2H/3 its centroid's height; under L < H the wet
+    part is the triangle at the toe cut by the level, similar to the face in the
+    ratio L/H, of area S·(L/H)² and centroid height 2L/3: U = γ_w·S·L³/(3H²).
+    """
+    if level <= 0.0:
+        return 0.0, 0.0
+    s_a, s_b, _ = wedge_faces(height, plane_a, plane_b, face)
+    head = level - 2.0 * height / 3.0 if level >= height else level**3 / (3.0 * height**2)
+    return gamma_water * s_a * head, gamma_water * s_b * head
+
+
+def wet_wedge_factor_of_safety(phi_a: float, phi_b: float, uplift_a: float, uplift_b: float, height: float = 6.0,
+                               cohesion_a: float = 0.0, cohesion_b: float = 0.0,
+                               plane_a: tuple[float, float] = WEDGE_PLANES[0],
+                               plane_b: tuple[float, float] = WEDGE_PLANES[1],
+                               face: tuple[float, float] = WEDGE_FACE, density: float = ROCK.density,
+                               g: float = G) -> float:
+    """FS of the wedge with the water forces ``uplift_a`` U_A and ``uplift_b`` U_B (N) on its faces on A and B.
+
+    U_A and U_B act normal to planes A and B, which both contain the line of
+    intersection, so they have no component along it: the driving force
+    W sin ψ_i is unchanged and each plane carries the effective normal force
+    N_i − U_i, N_A and N_B the dry normal reactions (:func:`wedge_solution`):
+
+        FS = [(N_A − U_A) tan φ_A + (N_B − U_B) tan φ_B + c_A S_A + c_B S_B] / (W sin ψ_i).
+    """
+    s_a, s_b, volume = wedge_faces(height, plane_a, plane_b, face)
+    weight = density * g * volume
+    s = wedge_solution(plane_a, plane_b, phi_a, phi_b, g)
+    resisting = ((s.normal_a * weight - uplift_a) * np.tan(np.radians(phi_a))
+                 + (s.normal_b * weight - uplift_b) * np.tan(np.radians(phi_b)) + cohesion_a * s_a + cohesion_b * s_b)
+    return float(resisting / (weight * np.sin(np.radians(s.plunge))))
 
 
 def _angle(u: np.ndarray, v: np.ndarray) -> float:

@@ -129,6 +129,8 @@ EXPECTED_SECONDS: dict[str, tuple[float, float]] = {
     "impact-restitution-3d": (7.4, 26.4),
     "fos-plane-2d": (4.1, 4.1),
     "fos-wedge-3d": (9.7, 9.7),
+    "fos-plane-wet-2d": (3.4, 3.4),  # measured 2026-11-26 on the branch that added them (4 agents on 2 cores)
+    "fos-wedge-wet-3d": (7.1, 7.1),
     "water-plane-2d": (10.0, 10.0),  # measured 2026-11-26 on the branch that added them (4 agents on 2 cores)
     "water-plane-3d": (21.8, 21.8),
     "water-uplift-2d": (1.4, 1.4),

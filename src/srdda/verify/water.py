@@ -10,6 +10,7 @@ from ..cases.plane_failure import (BASE_LENGTH, PLANE_DIP, plane_failure_acceler
                                    set_hoek_bray_water, wet_plane_forces, wet_plane_model)
 from ..constraints.water import UNIT_WEIGHT, WaterCrackTerm, contact_water
 from ..contact.pipeline import ContactModel
+from ..contact.record import ContactRecord
 from ..geometry.facets import boundary_simplices
 from ..model import JointMaterial, Material, Model, ModelArrays
 from ..results import Result
@@ -74,14 +75,25 @@ def _plane_model(dim: int, water: tuple[float, float] | None) -> Model:
     return wet_plane_model(FRICTION, water[0], water[1], young=young)
 
 
-def _contact_water(arrays: ModelArrays, penalty: float) -> float:
-    """Σ of the water forces of the contacts of ``arrays`` as built, N (per m in 2D)."""
-    settings = RunSettings(dt=PLANE_DT, n_steps=1, penalty=penalty)
+def contact_water_forces(arrays: ModelArrays, settings: RunSettings) -> tuple[ContactRecord, np.ndarray]:
+    """The contacts of ``arrays`` as built (with ``settings``' contact parameters) and their water forces, N (per m
+    in 2D)."""
     contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertices)))
     step = contacts.prepare(arrays.vertices, None, True)
     assert step is not None and arrays.water is not None
-    return float(np.sum(contact_water(arrays.water, step.record, contacts.params.distance, arrays.vertices,
-                                      boundary_simplices(arrays))))
+    return step.record, contact_water(arrays.water, step.record, contacts.params.distance, arrays.vertices,
+                                      boundary_simplices(arrays))
+
+
+def _contact_water(arrays: ModelArrays, penalty: float) -> float:
+    """Σ of the water forces of the contacts of ``arrays`` as built, N (per m in 2D)."""
+    return float(np.sum(contact_water_forces(arrays, RunSettings(dt=PLANE_DT, n_steps=1, penalty=penalty))[1]))
+
+
+def crack_water_force(arrays: ModelArrays) -> float:
+    """|Σ| of the tension cracks' water forces on the blocks of ``arrays`` as built, N (per m in 2D)."""
+    _, _, forces = WaterCrackTerm(arrays).resultants(arrays, arrays.vertices)
+    return float(np.linalg.norm(np.sum(forces, axis=0)))
 
 
 def _hoek_bray_rows(name: str, dim: int) -> list[Row]:
@@ -89,8 +101,7 @@ def _hoek_bray_rows(name: str, dim: int) -> list[Row]:
     set_hoek_bray_water(model, HOEK_BRAY_DEPTH)
     arrays = (model if dim == 2 else model.extruded(1.0)).arrays()
     uplift = _contact_water(arrays, PLANE_PENALTY)
-    _, _, forces = WaterCrackTerm(arrays).resultants(arrays, arrays.vertices)
-    crack = float(np.linalg.norm(np.sum(forces, axis=0)))
+    crack = crack_water_force(arrays)
     return [row(name, "Hoek & Bray's uplift U (N/m) = ½γ_w·z_w·L", "-", uplift,
                 0.5 * UNIT_WEIGHT * HOEK_BRAY_DEPTH * BASE_LENGTH, HOEK_BRAY_IDENTITY),
             row(name, "Hoek & Bray's crack force V (N/m) = ½γ_w·z_w²", "-", crack,
