@@ -44,13 +44,15 @@ def tunnel(run: Path) -> None:
         rows = (step >= excavation["first_step"]) & (step <= s["last_step"])
         d = np.linalg.norm(res.array("centroid")[rows] - res.array("centroid")[start], axis=-1)
         k, b = np.unravel_index(np.argmax(d), d.shape)
-        print(f"to the end of {s['name']}: largest displacement since the excavation {d.max():.3g} m ({res.block_names[b]})")
+        print(f"to the end of {s['name']}: largest displacement since the excavation {d.max():.3g} m "
+              f"({res.block_names[b]})")
     force = res.array("bolt_force")
     print(f"bolt forces: at installation {force[step > res.stages[2]['first_step']][0]}, end {force[-1]}, "
           f"range in the earthquake {force[step >= res.stages[3]['first_step']].min():.6g}-"
           f"{force[step >= res.stages[3]['first_step']].max():.6g} N/m")
     crown = res.array("measured_position")[:, 0]
-    print(f"crown point: largest displacement since the excavation {np.linalg.norm(crown[after] - crown[start], axis=-1).max():.3g} m")
+    crown_moved = np.linalg.norm(crown[after] - crown[start], axis=-1).max()
+    print(f"crown point: largest displacement since the excavation {crown_moved:.3g} m")
     for name, stage in (("gravity", res.stages[0]), ("earthquake", res.stages[3])):
         fig = plotting.fig_model(res, last_row(res, stage), color="speed")
         fig.savefig(FIGURES / f"stages-tunnel-{name}.png", dpi=110)
@@ -82,7 +84,8 @@ def wedge(run: Path) -> None:
     centroid, velocity = res.array("centroid")[:, 0], res.array("velocity")[:, 0, :3]
     start = int(np.searchsorted(step, cut["first_step"]))
     during_cut = (step >= cut["first_step"]) & (step <= cut["last_step"])
-    print(f"wedge travel during the cut stage: {np.linalg.norm(centroid[during_cut] - centroid[start], axis=1).max():.3g} m")
+    travel = np.linalg.norm(centroid[during_cut] - centroid[start], axis=1).max()
+    print(f"wedge travel during the cut stage: {travel:.3g} m")
     expected = wedge_solution(*WEDGE_PLANES, model.stages[2].joint_materials["joint"].friction_angle)
     i = int(np.searchsorted(t, residual["start_time"] + 0.05 - 5e-4))
     along = velocity @ line
@@ -95,10 +98,12 @@ def wedge(run: Path) -> None:
     colours = {"wedge": "tab:orange", "plane A": "0.7", "plane B": "0.55", "toe": "tan"}
     verts = res.array("vertices")
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), layout="constrained")
+    slid = (centroid[-1] - centroid[start]) @ line
     for ax, stage, what in ((axes[0], gravity, "before the cut (end of gravity), the toe in place"),
-                            (axes[1], residual, f"end of residual: the wedge slid {(centroid[-1] - centroid[start]) @ line:.2f} m")):
+                            (axes[1], residual, f"end of residual: the wedge slid {slid:.2f} m")):
         row = last_row(res, stage)
-        opacity = [0.0 if (n == "toe" and stage is residual) else 1.0 if n == "wedge" else 0.45 for n in res.block_names]
+        opacity = [0.0 if (n == "toe" and stage is residual) else 1.0 if n == "wedge" else 0.45
+                   for n in res.block_names]
         ax.imshow(render_blocks(verts[row], res.mesh, colors=[colours[n] for n in res.block_names], opacity=opacity,
                                 bounds=np.ravel(np.stack([verts[0].min(axis=0), verts[0].max(axis=0)]).T)))
         ax.set_axis_off()

@@ -14,8 +14,8 @@ material "excavation line"). Blocks touching the outer boundary are fixed. Stage
    the base; it runs the model's [run] steps (1.5 s), so `srdda run --steps N` shortens it.
 
 Every stage solves its contacts with ``contact_solver = "newton"``: it converges each step's contact
-problem to its minimum, which holds a settled model at rest (docs/contacts.md, docs/examples-staged.md). Run: python examples/stages/tunnel.py (writes tunnel.toml
-beside it), then srdda run examples/stages/tunnel.toml.
+problem to its minimum, which holds a settled model at rest (docs/contacts.md, docs/examples-staged.md).
+Run: python examples/stages/tunnel.py (writes tunnel.toml beside it), then srdda run examples/stages/tunnel.toml.
 """
 from pathlib import Path
 
@@ -77,8 +77,8 @@ model.add_stage(srdda.Stage("support", kind="equilibrium", install_bolts=[f"bolt
 settings = srdda.RunSettings(dt=2e-4, n_steps=7500, method="srdda", penalty=50 * 30e9, contact_solver="newton",
                              record_every=10)
 data = model_to_dict(model, settings, "circular tunnel in jointed granite, staged")
-data["stages"].append({"name": "earthquake", "base_acceleration": {"record": RECORD, "scale": SCALE, "baseline": "linear",
-                                                                   "components": "x"}})
+quake = {"record": RECORD, "scale": SCALE, "baseline": "linear", "components": "x"}
+data["stages"].append({"name": "earthquake", "base_acceleration": quake})
 header = "".join(f"# {line}\n" for line in [
     "A tunnel in jointed granite, staged: gravity (equilibrium), excavation (the tunnel's blocks removed),",
     f"support ({len(bolts)} rock bolts installed, equilibrium), earthquake (the synthetic record (PGA 0.35 g,",
@@ -86,5 +86,4 @@ header = "".join(f"# {line}\n" for line in [
     "docs/examples-staged.md.",
     "Written by examples/stages/tunnel.py."])
 (HERE / "tunnel.toml").write_text(header + tomli_w.dumps(data), encoding="utf-8")
-print(f"{cut.n_blocks} blocks, {int((~fixed).sum())} free, tunnel blocks {[n for n in names if n.startswith('tunnel')]},"
-      f" {len(bolts)} bolts -> {HERE / 'tunnel.toml'}")
+print(f"{cut.n_blocks} blocks, {int((~fixed).sum())} free, {len(bolts)} bolts -> {HERE / 'tunnel.toml'}")

@@ -1,5 +1,5 @@
-"""A 3D wedge above a cut slope, staged: equilibrium with the toe in place, the toe excavated, then the joints
-weakened to their residual friction.
+"""A 3D wedge above a cut slope, staged (srdda.cases.slope3d.wedge_cut_model): equilibrium with the toe in place,
+the toe excavated, then the joints weakened to their residual friction.
 
 The tetrahedral wedge of srdda.cases.slope3d (joint planes A 40°/130° and B 60°/220°, slope face
 70°/160°, horizontal top 6 m above the point where the line of intersection daylights). Before the cut,
@@ -19,32 +19,18 @@ beside it), then srdda run examples/stages/wedge-cut.toml.
 """
 from pathlib import Path
 
-import numpy as np
 import tomli_w
 
 import srdda
-from srdda.cases.slope3d import WEDGE_FACE, WEDGE_PLANES, wedge_friction_for, wedge_model, wedge_solution
-from srdda.geometry.cutting3d import halfspace_polyhedron
-from srdda.geometry.jointsets3d import plane_normal
+from srdda.cases.slope3d import WEDGE_FACE, WEDGE_PLANES, wedge_cut_model, wedge_friction_for, wedge_solution
 from srdda.io.modelfile import model_to_dict
-from srdda.model import JointMaterial
 
 HERE = Path(__file__).parent
 PEAK, RESIDUAL, HEIGHT, TOE = 1.2, 0.8, 6.0, 2.0  # factors of safety once daylighting; wedge, toe height (m)
 
 phi, residual = wedge_friction_for(PEAK), wedge_friction_for(RESIDUAL)
 peak_solution, solution = wedge_solution(*WEDGE_PLANES, phi), wedge_solution(*WEDGE_PLANES, residual)
-model = wedge_model(phi, height=HEIGHT)
-na, nb, nf = (plane_normal(*p) for p in (*WEDGE_PLANES, WEDGE_FACE))
-arrays = model.arrays()
-slabs = arrays.vertices[arrays.block_ptr[1]:]  # the two joint-plane blocks: the toe spans their extent
-lo, hi = slabs.min(axis=0), slabs.max(axis=0)
-hi[2] = TOE
-toe = halfspace_polyhedron([-na, -nb, -nf], [0.0, 0.0, 0.0], lo, hi, "toe")  # above A and B, in front of the face
-model.add_polyhedron(*toe, "rock", name="toe", fixed=True)
-model.add_stage(srdda.Stage("gravity", kind="equilibrium", max_steps=3000))
-model.add_stage(srdda.Stage("cut", remove_blocks=["toe"], reset_displacements=True))
-model.add_stage(srdda.Stage("residual", joint_materials={"joint": JointMaterial(friction_angle=residual)}))
+model = wedge_cut_model(PEAK, RESIDUAL, HEIGHT, TOE)  # the stages: gravity, cut, residual
 settings = srdda.RunSettings(dt=1e-3, n_steps=500, method="srdda", penalty=1e11, contact_solver="newton",
                              record_every=10)
 header = "".join(f"# {line}\n" for line in [
