@@ -28,24 +28,31 @@ def _joint_names(types: np.ndarray, joints: Mapping[int, str | None]) -> list[st
 
 def add_cut_blocks(model: Model, cut: BlockCut, materials: Mapping[int, str],
                    joints: Mapping[int, str | None] | None = None,
-                   fixed: Sequence[bool] | np.ndarray | None = None, prefix: str = "block") -> list[int]:
+                   fixed: Sequence[bool] | np.ndarray | None = None, prefix: str = "block",
+                   names: Sequence[str] | None = None) -> list[int]:
     """Add every block of ``cut`` to ``model``; returns their indices.
 
     ``materials`` maps the cut's material labels to the model's material
     names; ``joints`` maps joint types to joint-material names (a type not
     listed, and edges on no joint, take the joint chosen by the block
-    materials). ``fixed`` marks blocks that never move.
+    materials). ``fixed`` marks blocks that never move. ``names``: each
+    block's name (default ``"{prefix} {index}"``; a stage removes a group of
+    them by a pattern, e.g. ``"tunnel*"``).
     """
     joints = {} if joints is None else dict(joints)
     missing = sorted(set(np.unique(cut.block_material).tolist()) - set(materials))
     if missing:
         raise ModelError(f"cut blocks use material label(s) {missing} with no entry in materials")
     fixed_arr = _fixed_flags(fixed, cut.n_blocks)
+    if names is None:
+        names = [f"{prefix} {b}" for b in range(cut.n_blocks)]
+    elif len(names) != cut.n_blocks:
+        raise ModelError(f"names: expected {cut.n_blocks} block names, got {len(names)}")
     out = []
     for b in range(cut.n_blocks):
         verts, types = cut.block(b)
         edge_joints = _joint_names(types, joints)
-        out.append(model.add_block(verts, materials[int(cut.block_material[b])], name=f"{prefix} {b}",
+        out.append(model.add_block(verts, materials[int(cut.block_material[b])], name=names[b],
                                    fixed=bool(fixed_arr[b]),
                                    edge_joints=edge_joints if any(j is not None for j in edge_joints) else None))
     return out

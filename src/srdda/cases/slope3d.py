@@ -45,12 +45,13 @@ from ..geometry.cutting3d import halfspace_polyhedron
 from ..geometry.jointsets3d import plane_normal
 from ..geometry.polyhedron import box
 from ..model import JointMaterial, Material, Model
+from ..stages import Stage
 
 __all__ = ["G", "HoekBrayAngles", "hoek_bray_wedge_angles", "hoek_bray_wedge_factor_of_safety",
            "wedge_vertices", "wedge_faces", "wedge_water_forces", "wet_wedge_factor_of_safety", "SLIDE_TOPPLE_CASES",
            "SlideToppleCase", "WedgeSolution", "block_on_incline_model",
            "incline_acceleration", "slide_topple_mode", "slide_topple_model", "toppling_angular_acceleration",
-           "wedge_friction_for", "wedge_model", "wedge_solution", "WEDGE_PLANES", "WEDGE_FACE"]
+           "wedge_friction_for", "wedge_model", "wedge_solution", "WEDGE_PLANES", "WEDGE_FACE", "wedge_cut_model"]
 
 G = 9.81  # m/s²
 ROCK = Material(density=2600.0, young=10e9, poisson=0.25)
@@ -263,6 +264,30 @@ def wedge_model(phi: float, height: float = 6.0, depth: float = 2.0, plane_a: tu
     model.add_polyhedron(*slab_b, "rock", name="plane B", fixed=True)
     arrays = model.arrays()
     model.add_measured_point(arrays.moments(arrays.vertices).centroid[0], block=0)
+    return model
+
+
+def wedge_cut_model(peak_fs: float = 1.2, residual_fs: float = 0.8, height: float = 6.0, toe: float = 2.0) -> Model:
+    """The wedge of :func:`wedge_model` above a cut slope, staged (examples/stages/wedge_cut.py).
+
+    The "toe" (fixed, as intact rock) fills the space in front of the face above planes A and B up to
+    ``toe`` above the daylight point, over the joint-plane blocks' extent: before the cut the line of
+    intersection does not daylight. The joints' friction gives the daylighting wedge the factor of safety
+    ``peak_fs``. Stages: "gravity" (equilibrium), "cut" (the toe removed, displacements reset),
+    "residual" (the joint's friction lowered to give ``residual_fs``); the dynamic stages run the
+    settings' steps.
+    """
+    model = wedge_model(wedge_friction_for(peak_fs), height=height)
+    na, nb, nf = (plane_normal(*p) for p in (*WEDGE_PLANES, WEDGE_FACE))
+    arrays = model.arrays()
+    slabs = arrays.vertices[arrays.block_ptr[1]:]  # the two joint-plane blocks: the toe spans their extent
+    lo, hi = slabs.min(axis=0), slabs.max(axis=0)
+    hi[2] = toe
+    vertices, faces = halfspace_polyhedron([-na, -nb, -nf], [0.0, 0.0, 0.0], lo.tolist(), hi.tolist(), "toe")
+    model.add_polyhedron(vertices.tolist(), [f.tolist() for f in faces], "rock", name="toe", fixed=True)
+    model.add_stage(Stage("gravity", kind="equilibrium"))
+    model.add_stage(Stage("cut", remove_blocks=["toe"], reset_displacements=True))
+    model.add_stage(Stage("residual", joint_materials={"joint": JointMaterial(friction_angle=wedge_friction_for(residual_fs))}))
     return model
 
 

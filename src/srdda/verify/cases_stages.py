@@ -4,11 +4,17 @@
 the unbalanced-force ratio 1e-5, and the vertical stress at every block's centroid is the overburden ρ·g·h
 (h: the depth of the centroid below the top). ``stage-excavation-2d`` / ``-3d``: after an equilibrium
 stage, a stage that removes the block under another makes it fall at g from the stage's start.
+``stage-wedge-cut-3d``: the wedge above a cut slope of examples/stages/wedge-cut.toml
+(:func:`srdda.cases.slope3d.wedge_cut_model`): after the toe is cut it stays at FS 1.2 and, its joints
+weakened, slides at Hoek & Bray's a = g sin ψ_i (1 − FS) at FS 0.8.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
+from ..cases.slope3d import WEDGE_PLANES, wedge_cut_model, wedge_solution
 from ..model import JointMaterial, Material, Model
 from ..results import Result
 from ..settings import RunSettings
@@ -104,3 +110,39 @@ for _dim, _methods in ((2, ("dda0", "dda1", "srdda")), (3, ("srdda",))):
         lambda methods, quick, dim=_dim: _column(f"stage-column-{dim}d", dim, methods))
     case(f"stage-excavation-{_dim}d", dim=_dim, methods=_methods, description=EXCAVATION)(
         lambda methods, quick, dim=_dim: _excavation(f"stage-excavation-{dim}d", dim, methods))
+
+
+# stage-wedge-cut-3d: Δt = 1 ms, k_n = 1e11 N/m as wedge-3d, contacts by Newton (docs/examples-staged.md); the cut
+# stage 200 steps, the residual stage 250 (the example runs 500 each)
+WEDGE_CUT_STEPS = (200, 250)
+# after the cut, FS 1.2: wedge-rest-3d's bound on the travel, 1e-5 m; measured 7.2e-7 m (the springs' take-up
+# of the toe's removal)
+WEDGE_CUT_REST = 1e-5
+# residual, FS 0.8: wedge-3d's bound of 2 % on the acceleration along the line of intersection, from the
+# velocity along it from 0.05 s after the stage's start to its end; measured 1.6e-6
+WEDGE_CUT_ACCELERATION = 2e-2
+
+
+@case("stage-wedge-cut-3d", dim=3, methods=("srdda",),
+      description="a wedge above a cut slope: stays after the toe is cut at FS 1.2, slides at FS 0.8 (Hoek & Bray)")
+def wedge_cut(methods: tuple[str, ...], quick: bool) -> list[Row]:
+    rows: list[Row] = []
+    for method in methods:
+        m = wedge_cut_model()
+        m.stages[1:] = [replace(s, run={"n_steps": n}) for s, n in zip(m.stages[1:], WEDGE_CUT_STEPS)]
+        settings = RunSettings(dt=1e-3, n_steps=1, method=method, penalty=1e11, contact_solver="newton")
+        res = _completed(run(m, settings), f"stage-wedge-cut-3d {method}")
+        _, cut, residual = res.stages
+        step, time = res.array("step"), np.asarray(res.time)
+        centroid, velocity = res.array("centroid")[:, 0], res.array("velocity")[:, 0, :3]
+        during = np.flatnonzero((step >= cut["first_step"]) & (step <= cut["last_step"]))
+        travel = float(np.linalg.norm(centroid[during] - centroid[during[0]], axis=1).max())
+        rows.append(row("stage-wedge-cut-3d", f"travel after the toe is cut, {WEDGE_CUT_STEPS[0]} steps (m), FS 1.2",
+                        method, travel, 0.0, WEDGE_CUT_REST))
+        solution = wedge_solution(*WEDGE_PLANES, m.stages[2].joint_materials["joint"].friction_angle)
+        i = int(np.searchsorted(time, residual["start_time"] + 0.05 - 5e-4))
+        along = velocity @ solution.line
+        rows.append(row("stage-wedge-cut-3d", "acceleration along the line of intersection (m/s²), residual, FS 0.8",
+                        method, (along[-1] - along[i]) / (time[-1] - time[i]), solution.acceleration,
+                        WEDGE_CUT_ACCELERATION))
+    return rows
