@@ -216,3 +216,26 @@ def test_a_vertex_beside_a_rim_is_no_deep_penetration():
     found, gap = _deep(arrays)
     deep = (found[:, 0] == VERTEX_FACE) & np.isclose(gap, -0.01)
     assert deep.sum() == 1, (found, gap)
+
+
+def test_spring_points_are_material_points_when_the_blocks_strain():
+    # a shear spring joins material points of the two blocks: after any affine motion of both blocks (a strain,
+    # here 1e-3 stretch and 5e-4 shear, as a step's elastic strain in DDA), an unstretched spring stays
+    # unstretched. The vertex-face contacts store their face point in the coordinates of the face's edges; in
+    # unit axes the point would move by strain × its distance from the face's first vertex (0.5e-3 m here, the
+    # 2.7e-5 m a step found on the 3D slope). Rounding: the coordinates are O(1) m, so 1e-13 m is ~500 ulps.
+    v, f = box((-0.5, -0.35, 0.0), (0.5, 0.35, 0.6))  # turned 30° about z over the lower block's edge x = 2
+    top = (v @ rotation_matrix_3d(np.array([[0.0, 0.0, np.radians(30.0)]]))[0].T + [1.8, 0.7, 1.0], f)
+    arrays = _arrays(box((0.0, 0.0, 0.0), (2.0, 1.5, 1.0)), top, fixed=(0,))
+    model = _model(arrays)
+    start = model.detector.detect(arrays.vertices)
+    assert np.any(start.features[:, 0] == VERTEX_FACE) and np.any(start.features[:, 0] == EDGE_EDGE)
+    strain = np.array([[1.0 + 1e-3, 5e-4, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    moved = model.detector.detect(arrays.vertices @ strain.T)
+    assert np.array_equal(moved.key, start.key)
+    assert np.max(np.abs(start.shear(start.start_reference))) < 1e-13
+    assert np.max(np.abs(moved.shear(start.start_reference))) < 1e-13
+    # and a reference shift changes the shear by what it was asked for, for every kind of contact
+    wanted = np.random.default_rng(0).normal(0.0, 1e-6, start.start_reference.shape)
+    shifted = start.start_reference + start.reference_shift(wanted)
+    assert np.allclose(start.shear(shifted), wanted, rtol=0.0, atol=1e-13)

@@ -7,7 +7,9 @@ find vertex-face and edge-edge contacts; this module gives their geometry
 * vertex-face: x_a the vertex, x_b its projection on the face's plane, n the
   face's outward normal, e1 along the face's first edge, e2 = n × e1; the
   shear spring joins the vertex (r_a) to a point of the face stored in the
-  face's frame (r_b = the face's first vertex + ρ_1 e1 + ρ_2 e2);
+  coordinates of the face's two edges at its first vertex f_0 (r_b = f_0 +
+  ρ_1 (f_1 − f_0) + ρ_2 (f_last − f_0): a material point of the face, also
+  when the block strains);
 * edge-edge: x_a, x_b the closest points of the two edges, n their cross
   product turned outward from b, e1 along b's edge; the spring joins points
   of the two edges at edge parameters (ρ_1 on a's, ρ_2 on b's).
@@ -132,6 +134,7 @@ def contact_record_3d(vertices: np.ndarray, mesh: PolyhedronMesh, topo: Polyhedr
     normal = surface.face_normal[face]
     f0 = vertices[mesh.face_vertex[mesh.face_ptr[face]]]
     f1 = vertices[mesh.face_vertex[mesh.face_ptr[face] + 1]]
+    f_last = vertices[mesh.face_vertex[mesh.face_ptr[face + 1] - 1]]
     v = vertices[np.where(is_edge, 0, fa)]
     gap = np.einsum("ni,ni->n", normal, v - surface.face_point[face])
     point_a = v.copy()
@@ -165,8 +168,13 @@ def contact_record_3d(vertices: np.ndarray, mesh: PolyhedronMesh, topo: Polyhedr
         parameter[is_edge] = np.column_stack([s, t])
     frame = np.stack([e1, np.cross(normal, e1)], axis=1)
     on_face = ~is_edge
-    parameter[on_face] = np.einsum("nki,ni->nk", frame[on_face], point_b[on_face] - anchor_b[on_face])
-    axes_b = frame.copy()
+    # a face's spring point in the coordinates of its two edges at f0: a material point of the face under
+    # any affine motion of b (its strain included), as the edge parameters are (unit axes are not: a strained
+    # face would move a spring point ρ from f0 by strain × ρ a step, a stretch far beyond τ/k_s)
+    axes_b = np.stack([f1 - f0, f_last - f0], axis=1)
+    in_plane = np.einsum("nji,nki->njk", frame[on_face], axes_b[on_face])
+    parameter[on_face] = np.linalg.solve(in_plane, np.einsum("nki,ni->nk", frame[on_face],
+                                                             point_b[on_face] - anchor_b[on_face])[..., None])[..., 0]
     if np.any(is_edge):
         axes_b[is_edge, 0] = 0.0
         axes_b[is_edge, 1] = w

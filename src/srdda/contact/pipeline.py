@@ -542,7 +542,9 @@ class ContactModel:
         dragged = kept & record.draggable
         dragged[kept] &= previous.state[src] == SLIDING
         cap = response.friction[dragged] * previous.normal_force[old[dragged]] / response.shear_stiffness[dragged]
-        reference[dragged] -= cap[:, None] * previous.direction[old[dragged]]
+        drag = np.zeros((n, k))
+        drag[dragged] = cap[:, None] * previous.direction[old[dragged]]
+        reference[dragged] += record.reference_shift(drag)[dragged]
         return ContactStep(record, self.kind, self.params, response, self.law, state, direction, reference, bonded,
                            normal_force)
 

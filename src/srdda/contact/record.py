@@ -72,7 +72,7 @@ class ContactRecord:
 
     def reference_shift(self, shear_change: np.ndarray) -> np.ndarray:
         """The change of the references (n, k) that changes the springs' shears by ``shear_change`` (n, k):
-        M·Δρ = Δs with M_ji = e_j·(axes_a_i − axes_b_i) (2D: −|edge|; vertex-face: −I; edge-edge: the two edges
+        M·Δρ = Δs with M_ji = e_j·(axes_a_i − axes_b_i) (2D: −|edge|; vertex-face: minus the face's two edges; edge-edge: the two edges
         seen in the frame), in the configuration of the record."""
         m = np.einsum("nji,nki->njk", self.frame, self.axes_a - self.axes_b)
         return np.linalg.solve(m, shear_change[..., None])[..., 0]
