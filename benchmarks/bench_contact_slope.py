@@ -59,7 +59,7 @@ def main(steps: int, profile: bool) -> None:
     settings = srdda.RunSettings(dt=2e-4, n_steps=steps, method="srdda", penalty=5e10, record_every=steps)
     n_free = int(np.count_nonzero(~arrays.block_fixed))
     print(f"# {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}")
-    print(f"blocks {arrays.n_blocks} ({n_free} free), vertices {len(arrays.vertices)}")
+    print(f"blocks {arrays.n_blocks} ({n_free} free), vertices {len(arrays.vertex_position)}")
     srdda.run(model, srdda.RunSettings(dt=2e-4, n_steps=2, method="srdda", penalty=5e10))  # compile numba
     solves: list[int] = []
 

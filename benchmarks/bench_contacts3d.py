@@ -49,7 +49,7 @@ def time_detection(n_blocks: int, d0: float = 0.01, repeats: int = 3) -> dict:
     arrays = cube_grid(n_blocks).arrays()
     build = time.perf_counter() - t0
     cm = SolidContactModel(arrays, ContactParameters(1e10, 4e9, d0, np.radians(3.0), 0.4 * d0))
-    v = arrays.vertices
+    v = arrays.vertex_position
     cm.detect(v)  # compile
     best = {"broad": np.inf, "narrow": np.inf, "detect": np.inf}
     for _ in range(repeats):

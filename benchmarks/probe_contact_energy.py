@@ -29,7 +29,7 @@ def trial(seed, method, steps=600):
     E = r.array("energy"); keys = list(r.energy[0]); tot = E[:, keys.index("total")]
     a = m.arrays(); free = ~a.block_fixed
     # energy scale: potential energy of free blocks above the model bottom
-    mom = a.moments(a.vertices); scale = float(np.sum((2700 * mom.area * 9.81 * (mom.centroid[:, 1] + 5))[free]))
+    mom = a.moments(a.vertex_position); scale = float(np.sum((2700 * mom.area * 9.81 * (mom.centroid[:, 1] + 5))[free]))
     v = r.array("velocity"); speed = np.hypot(v[:, :, 0], v[:, :, 1]).max()
     return cut.n_blocks, r.status[:40], (tot.max() - tot[0]) / scale, speed
 for seed in range(int(sys.argv[1]), int(sys.argv[2])):

@@ -42,7 +42,7 @@ class PhantomCounter:
         if c is None or len(c.vertex) == 0:
             return
         x = state.vertices
-        p, q0, q1 = x[c.vertex], x[c.edge], x[arrays.next_vertex[c.edge]]
+        p, q0, q1 = x[c.vertex], x[c.edge], x[arrays.vertex_next[c.edge]]
         d = q1 - q0
         t = np.einsum("ij,ij->i", p - q0, d) / np.einsum("ij,ij->i", d, d)
         nearest_end = np.where((np.hypot(*(p - q0).T) < np.hypot(*(p - q1).T))[:, None], q0, q1)

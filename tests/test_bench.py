@@ -64,18 +64,18 @@ def test_brick_wall_counts_area_and_bond(nx: int, ny: int) -> None:
     arrays = model.arrays()
     assert arrays.n_blocks == 1 + nx * ny + ny // 2  # the base, nx per row, one more in odd rows
     base_area = (nx + 2 * BRICK.base_overhang) * BRICK.base_depth
-    area = arrays.moments(arrays.vertices).area
+    area = arrays.moments(arrays.vertex_position).area
     # exact: every coordinate is a multiple of 0.5 m, so the moment sums are exact in binary
     assert area.sum() == nx * ny * 0.5 + base_area
     assert area[0] == base_area and arrays.block_fixed.tolist() == [True] + [False] * (arrays.n_blocks - 1)
     assert np.count_nonzero(area == 0.25) == 2 * (ny // 2)  # half bricks at both ends of the odd rows
-    polys = [shapely.Polygon(v) for v in np.split(arrays.vertices, arrays.block_ptr[1:-1])]
+    polys = [shapely.Polygon(v) for v in np.split(arrays.vertex_position, arrays.block_ptr[1:-1])]
     tree = shapely.STRtree(polys)
     i, j = tree.query(polys, predicate="intersects")
     pairs = i < j
     overlap = shapely.area(shapely.intersection(np.take(polys, i[pairs]), np.take(polys, j[pairs])))
     assert overlap.max(initial=0.0) == 0.0  # neighbours share edges only
-    assert settings.max_displacement_ratio * model_half_height(arrays.vertices) == pytest.approx(
+    assert settings.max_displacement_ratio * model_half_height(arrays.vertex_position) == pytest.approx(
         BRICK.step_displacement, rel=1e-12)
     assert (settings.dt, settings.contact_penalty, settings.method) == (1e-3, 5e10, "dda0")
     assert model.materials["brick"].young == 5e9 and model.materials["brick"].poisson == 0.2
@@ -141,8 +141,8 @@ SLOPE_3D_BLOCKS = 1021
 def _initial_gaps(model: Model, settings: RunSettings) -> tuple[np.ndarray, float]:
     """Gaps (m) of every contact detected at t = 0 (the run's own detection) and the detection distance d0."""
     arrays = model.arrays()
-    params = contact_parameters(arrays, settings, model_half_height(arrays.vertices))
-    record = ContactModel(arrays, params).detector.detect(arrays.vertices)
+    params = contact_parameters(arrays, settings, model_half_height(arrays.vertex_position))
+    record = ContactModel(arrays, params).detector.detect(arrays.vertex_position)
     return (np.empty(0) if record is None else record.gap), params.distance
 
 
@@ -151,7 +151,7 @@ def test_slope_3d_blocks_volume_and_settings() -> None:
     arrays = model.arrays()
     assert arrays.n_blocks == SLOPE_3D_BLOCKS
     assert arrays.block_fixed.tolist() == [True] + [False] * (SLOPE_3D_BLOCKS - 1)
-    volume = arrays.moments(arrays.vertices).volume
+    volume = arrays.moments(arrays.vertex_position).volume
     # the base slab 60 x 5 m and the rock above it, the 2D profile's trapezoid (45 + 25) / 2 x 20 m, over
     # the 12 m width; the cut blocks tile it: 1e-9 relative covers the rounding of the cut's coordinates
     assert volume[0] == pytest.approx(60.0 * 5.0 * SLOPE_3D.width, rel=1e-12)
@@ -192,7 +192,7 @@ def test_english_bond_wall_counts_volume_and_bond(nx: int, courses: int) -> None
     arrays = model.arrays()
     headers = courses // 2
     assert arrays.n_blocks == 1 + 2 * nx * (courses - headers) + (2 * nx + 1) * headers
-    volume = arrays.moments(arrays.vertices).volume
+    volume = arrays.moments(arrays.vertex_position).volume
     # exact: every coordinate is a multiple of 0.25 m, so the moment sums are exact in binary
     assert volume[0] == (nx + 2.0) * 3.0 * 1.0  # base (nx + 2) x (1 + 2) x 1 m
     assert volume[1:].sum() == nx * 1.0 * 1.0 * 0.5 * courses  # the wall nx x 1 m x courses x 0.5 m, filled
@@ -207,7 +207,7 @@ def test_english_bond_wall_counts_volume_and_bond(nx: int, courses: int) -> None
     joints = [set(np.concatenate([lo[course % 2 == k, 0], hi[course % 2 == k, 0]]).tolist()) - {0.0, float(nx)}
               for k in (0, 1)]
     assert not joints[0] & joints[1]
-    assert settings.max_displacement_ratio * model_half_height(arrays.vertices) == pytest.approx(
+    assert settings.max_displacement_ratio * model_half_height(arrays.vertex_position) == pytest.approx(
         BRICK.step_displacement, rel=1e-12)
     assert (settings.dt, settings.contact_penalty, settings.method) == (1e-3, 5e10, "dda0")
 

@@ -53,7 +53,7 @@ def test_linear_momentum_follows_gravity(flight):
 
 def test_dda0_area_grows_as_its_linear_update_predicts(flight):
     method, arrays, state = flight
-    area0 = arrays.moments(arrays.vertices).area
+    area0 = arrays.moments(arrays.vertex_position).area
     if method == "dda0":
         # a rigid rotation r0 = ωΔt per step maps the block by I + r0·J: area × det = 1 + r0² per step
         expected = (1.0 + (OMEGA * DT) ** 2) ** STEPS

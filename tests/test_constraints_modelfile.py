@@ -12,13 +12,14 @@ USER_EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 def _same_arrays(a, b):
-    assert np.array_equal(a.vertices, b.vertices)
-    assert np.array_equal(a.points, b.points) and np.array_equal(a.point_block, b.point_block)
+    assert np.array_equal(a.vertex_position, b.vertex_position)
+    assert np.array_equal(a.attached.point_position, b.attached.point_position)
+    assert np.array_equal(a.attached.point_block, b.attached.point_block)
     for name in ("hinge_rows_a", "hinge_rows_b", "hinge_block_b", "hinge_correct", "spring_rows_a",
                  "spring_rows_b", "spring_stiffness", "spring_damping", "spring_rest", "spring_offset",
                  "spring_axial", "prescribed_rows", "prescribed_mask", "prescribed_multiplier"):
         assert np.array_equal(getattr(a.links, name), getattr(b.links, name)), name
-    assert np.allclose(a.density, b.density) and np.allclose(a.elasticity, b.elasticity)
+    assert np.allclose(a.block_density, b.block_density) and np.allclose(a.block_elasticity, b.block_elasticity)
 
 
 @pytest.mark.parametrize(("file", "module"), [("nunchaku.toml", nunchaku), ("sine-wave.toml", sine_wave)])

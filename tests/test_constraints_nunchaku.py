@@ -139,6 +139,6 @@ def test_hinged_blocks_are_no_contact_pair():
     model.add_block([[0.2, 0.05], [0.4, 0.05], [0.4, 0.15], [0.2, 0.15]], "stick", name="bob")
     arrays = model.arrays()
     contacts = srdda.step.Stepper(arrays, srdda.RunSettings(dt=1e-3, n_steps=1), srdda.get_solver()).terms[-1]
-    record = contacts.model.detector.detect(arrays.vertices)
+    record = contacts.model.detector.detect(arrays.vertex_position)
     blocks = {tuple(sorted(p)) for p in zip(record.block_a.tolist(), record.block_b.tolist())}
     assert blocks == {(0, 2)}  # bob on AB1 only; AB1-B2C (hinged) left out

@@ -32,7 +32,7 @@ def _model(arrays, d0=D0):
 
 def _detect(arrays, d0=D0):
     """The detected features (k, 5) and the contact record (None when there are none)."""
-    record = _model(arrays, d0).detector.detect(arrays.vertices)
+    record = _model(arrays, d0).detector.detect(arrays.vertex_position)
     return (np.empty((0, 5), dtype=np.int64) if record is None else record.features), record
 
 
@@ -159,7 +159,7 @@ def test_penetrating_vertex_beyond_a_thin_plate_is_not_a_contact_with_its_far_fa
     arr = _arrays(plate, cube)
     found, _ = _detect(arr)
     detector = _model(arr).detector
-    surface = surface_geometry(arr.vertices, detector.mesh, detector.topology, detector.sin_tol)
+    surface = surface_geometry(arr.vertex_position, detector.mesh, detector.topology, detector.sin_tol)
     cube_on_plate = found[(found[:, 3] == 1) & (found[:, 0] == VERTEX_FACE)]
     assert len(cube_on_plate) == 4
     np.testing.assert_allclose(surface.face_normal[cube_on_plate[:, 2]], [[0, 0, 1]] * 4, atol=1e-15)
@@ -170,7 +170,7 @@ def test_detection_does_not_depend_on_the_frame(turn):
     # the same configuration turned about an arbitrary axis gives the same contacts and gaps
     arr = _arrays(box((-2, -2, -1), (2, 2, 0)), box((0, 0, 0.01), (1, 1, 1)))
     R = rotation_matrix_3d(np.array([[turn, -0.4 * turn, 0.7]]))[0]
-    moved = _arrays(*[(arr.vertices[arr.block_ptr[b]:arr.block_ptr[b + 1]] @ R.T,
+    moved = _arrays(*[(arr.vertex_position[arr.block_ptr[b]:arr.block_ptr[b + 1]] @ R.T,
                        [f - arr.block_ptr[b] for f in _faces(arr, b)]) for b in range(2)])
     f1, g1 = _detect(arr)
     f2, g2 = _detect(moved)
@@ -186,13 +186,14 @@ def _faces(arr, b):
 
 def test_block_boxes_3d():
     arr = _arrays(box((0, 0, 0), (1, 2, 3)), box((5, 5, 5), (6, 6, 6)))
-    np.testing.assert_array_equal(block_boxes(arr.vertices, arr.block_ptr), [[0, 0, 0, 1, 2, 3], [5, 5, 5, 6, 6, 6]])
+    np.testing.assert_array_equal(block_boxes(arr.vertex_position, arr.block_ptr),
+                                  [[0, 0, 0, 1, 2, 3], [5, 5, 5, 6, 6, 6]])
 
 
 def _deep(arrays):
     """Features and record with d0 = 0.3 m and 0.125 m allowed depth."""
     record = ContactModel(arrays, ContactParameters(1e9, 4e8, 0.3, np.radians(3.0), 0.125)).detector.detect(
-        arrays.vertices)
+        arrays.vertex_position)
     if record is None:
         return np.empty((0, 5), dtype=np.int64), np.empty(0)
     return record.features, record.gap

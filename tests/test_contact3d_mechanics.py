@@ -119,7 +119,7 @@ def test_the_empty_contact_set_has_the_shapes_of_a_full_one():
     m.add_polyhedron(*box((0, 0, 0.001), (0.5, 0.5, 0.5)), "rock")
     arrays = m.arrays()
     record = ContactModel(arrays, ContactParameters(1e9, 4e8, 0.05, np.radians(3.0), 0.02)).detector.detect(
-        arrays.vertices)
+        arrays.vertex_position)
     empty = ContactSet.empty(record)
     assert empty.direction.shape == (0, 2) and empty.point.shape == (0, 3) and empty.max_penetration == 0.0
     assert empty.features.shape == (0, record.features.shape[1])

@@ -23,9 +23,9 @@ def _model(*blocks):
 
 def _detect(arrays, d0=D0):
     cm = ContactModel(arrays, ContactParameters(1e9, 4e8, d0, np.radians(3.0), 0.4 * d0))
-    record = cm.detector.detect(arrays.vertices)
+    record = cm.detector.detect(arrays.vertex_position)
     found = np.empty((0, 3), dtype=np.int64) if record is None else record.features
-    return {(tuple(arrays.vertices[v]), tuple(arrays.vertices[e]), int(k)) for v, e, k in found}
+    return {(tuple(arrays.vertex_position[v]), tuple(arrays.vertex_position[e]), int(k)) for v, e, k in found}
 
 
 def test_vertex_on_edge_of_convex_block():
@@ -65,7 +65,7 @@ def test_stacked_equal_squares_vertex_vertex_once_with_the_right_entrance_line()
     for vertex, edge_start, kind in found:
         assert kind == VERTEX_VERTEX
         v = np.array(vertex)
-        e = arr.vertices[np.flatnonzero((arr.vertices == edge_start).all(axis=1))]
+        e = arr.vertex_position[np.flatnonzero((arr.vertex_position == edge_start).all(axis=1))]
         assert v[1] == 1.0 and all(p[1] == 1.0 for p in e)
     # Each contacted edge is horizontal (both ends at y = 1).
     for _, edge_start, _ in found:
@@ -142,7 +142,7 @@ def test_broad_phase_finds_every_pair_that_all_pairs_finds(seed):
 
 def test_block_boxes():
     arr = _model([[0, 0], [1, 0], [1, 1], [0, 1]], [[2, 3], [4, 3], [3, 5]])
-    assert np.array_equal(block_boxes(arr.vertices, arr.block_ptr), [[0, 0, 1, 1], [2, 3, 4, 5]])
+    assert np.array_equal(block_boxes(arr.vertex_position, arr.block_ptr), [[0, 0, 1, 1], [2, 3, 4, 5]])
 
 
 def test_match_previous():
@@ -215,7 +215,7 @@ def test_penetrating_corner_is_found_on_either_side_of_rounding(outside):
     apex = np.array([1.0, 1.0 - 1e-8]) + (outside + shear * 1e-8 / np.hypot(1.0, shear)) * normal
     arr = _model([[0, 0], [1 - shear, 0], [1, 1], [0, 1]], [apex, apex + [0.3, 0.5], apex + [-0.3, 0.5]])
     found = _detect(arr)
-    v = tuple(arr.vertices[4])
+    v = tuple(arr.vertex_position[4])
     assert any(f[0] == v and f[1] == (1.0, 1.0) for f in found), found
 
 

@@ -64,7 +64,7 @@ def test_rockfall_srdda_keeps_omega_before_the_first_contact(rockfall_srdda):
 def test_rockfall_penetration_within_tolerance_every_step(rockfall_srdda):
     model, settings, res = rockfall_srdda
     arrays = model.arrays()
-    w0 = srdda.step.model_half_height(arrays.vertices)
+    w0 = srdda.step.model_half_height(arrays.vertex_position)
     limit = srdda.step.contact_parameters(arrays, settings, w0).max_penetration
     assert max(res.max_penetration) <= limit
     assert max(res.closed_contacts) > 0
@@ -113,10 +113,10 @@ def test_contact_transfer_keeps_reference_state_and_bond():
     arrays = m.arrays()
     params = ContactParameters(1e9, 4e8, 0.05, np.radians(3.0), 0.02)
     cm = ContactModel(arrays, params)
-    first = cm.prepare(arrays.vertices, None, first_step=True)
+    first = cm.prepare(arrays.vertex_position, None, first_step=True)
     assert len(first) == 2 and np.all(first.state == LOCKED) and np.all(first.bonded)
     previous = _carried(first, [LOCKED, SLIDING], [0, 1], [0.123, 0.456], [True, False], [7.0, 8.0], [0.0, 0.0])
-    moved = arrays.vertices.copy()
+    moved = arrays.vertex_position.copy()
     moved[arrays.vertex_block == 1] += [0.01, 0.0]  # the upper block slid 1 cm
     term = cm.prepare(moved, previous, first_step=False)
     assert np.array_equal(term.record.features, first.record.features)
@@ -141,15 +141,15 @@ def test_a_sliding_contact_that_came_to_rest_starts_the_next_step_locked():
     arrays = m.arrays()
     band = 1e-6  # f0·w0 (m)
     cm = ContactModel(arrays, ContactParameters(1e9, 4e8, 0.05, np.radians(3.0), 0.02, tolerance=band))
-    first = cm.prepare(arrays.vertices, None, first_step=True)
+    first = cm.prepare(arrays.vertex_position, None, first_step=True)
     slid = [0.5 * band, -5.0 * band]  # the first within the band, the second clearly sliding
     previous = _carried(first, [SLIDING, SLIDING], [1, -1], [0.123, 0.456], [False, False], [7.0, 8.0], slid)
-    term = cm.prepare(arrays.vertices, previous, first_step=False)
+    term = cm.prepare(arrays.vertex_position, previous, first_step=False)
     assert term.state.tolist() == [LOCKED, SLIDING] and term.direction[:, 0].tolist() == [0, -1]
     assert term.reference[0, 0] == pytest.approx(term.record.start_reference[0, 0])  # unstretched: no stored force
     assert term.shear0[0, 0] == pytest.approx(0.0, abs=1e-15)
     # the step's slip is what an accepted step commits for a sliding contact (its spring's stretch when locked)
-    step = cm.prepare(arrays.vertices, None, first_step=False)
+    step = cm.prepare(arrays.vertex_position, None, first_step=False)
     step.state[:] = SLIDING
     step.shear = step.shear0 + np.array([[3e-7], [-2e-6]])
     committed = step.commit()
@@ -163,11 +163,11 @@ def test_rockfall_model_file_is_the_builder_model():
     model, settings = load_model(examples_dir() / "paper" / "rockfall.toml")
     built, built_settings = rockfall.build("srdda")
     a, b = model.arrays(), built.arrays()
-    assert np.allclose(a.vertices, b.vertices, rtol=0, atol=1e-12)
-    assert np.array_equal(a.block_fixed, b.block_fixed) and np.allclose(a.velocity, b.velocity)
+    assert np.allclose(a.vertex_position, b.vertex_position, rtol=0, atol=1e-12)
+    assert np.array_equal(a.block_fixed, b.block_fixed) and np.allclose(a.block_velocity, b.block_velocity)
     assert all(np.allclose(getattr(a.joints, f.name), getattr(b.joints, f.name), equal_nan=True)
                for f in dataclasses.fields(a.joints))
-    assert np.allclose(a.points, b.points)
+    assert np.allclose(a.attached.point_position, b.attached.point_position)
     assert settings == built_settings
 
 
@@ -223,7 +223,7 @@ def test_new_vertex_vertex_contact_starts_with_an_unstretched_shear_spring():
     m = _block_beside_a_corner_on_its_edge_line()
     arrays = m.arrays()
     params = ContactParameters(2.5e11, 1e11, 0.03125, np.radians(3.0), 0.0125)
-    term = ContactModel(arrays, params).prepare(arrays.vertices, None, first_step=True)
+    term = ContactModel(arrays, params).prepare(arrays.vertex_position, None, first_step=True)
     overhang_corner = int(arrays.block_ptr[1]) + 1
     features = term.record.features
     vv = (features[:, 0] == overhang_corner) & (features[:, 2] == 1)
@@ -273,6 +273,6 @@ def test_sliver_in_random_jointed_slope_is_not_ejected():
     v = res.array("velocity")
     assert np.max(np.hypot(v[:, :, 0], v[:, :, 1])) < 0.12
     a = m.arrays()
-    weight = float(np.sum((2700.0 * a.moments(a.vertices).area * 9.81)[~a.block_fixed]))
+    weight = float(np.sum((2700.0 * a.moments(a.vertex_position).area * 9.81)[~a.block_fixed]))
     total = _energy(res, "total")
     assert np.max(total - total[0]) <= 1e-6 * weight

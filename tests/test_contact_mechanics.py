@@ -141,7 +141,7 @@ def test_contact_sees_the_displacement_the_update_makes(method, bound):
     arrays = model.arrays()
     vertex, edge = c.features[:, 0], c.features[:, 1]  # the 2D detector's [vertex, edge start, kind]
     p0 = state.vertices[edge]
-    d = state.vertices[arrays.next_vertex[edge]] - p0
+    d = state.vertices[arrays.vertex_next[edge]] - p0
     normal = np.column_stack([d[:, 1], -d[:, 0]]) / np.linalg.norm(d, axis=1)[:, None]
     actual = np.einsum("nk,nk->n", state.vertices[vertex] - p0, normal)
     assert np.all(c.closed) and np.all(c.gap < 0)  # the corner was driven into the base

@@ -55,13 +55,14 @@ def test_contacts_stand_for_their_share_of_the_joint_and_take_its_own_shear_stif
     arrays = model.arrays()
     params = ContactParameters(5e9, 2e9, 0.02, np.radians(3.0), 0.008)
     cm = ContactModel(arrays, params)
-    step = cm.prepare(arrays.vertices, None, first_step=True)
+    step = cm.prepare(arrays.vertex_position, None, first_step=True)
     area = 2.0 if dim == 2 else 3.0
     on_base = step.record.block_b == 0
     assert step.record.tributary[on_base].sum() == pytest.approx(area, rel=1e-12)
     np.testing.assert_allclose(step.response.normal_stiffness, KN * step.record.tributary, rtol=1e-15)
     np.testing.assert_allclose(step.response.shear_stiffness, 0.1 * KN * step.record.tributary, rtol=1e-15)
-    plain = ContactModel(_resting(dim, srdda.JointMaterial()).arrays(), params).prepare(arrays.vertices, None, True)
+    resting = _resting(dim, srdda.JointMaterial()).arrays()
+    plain = ContactModel(resting, params).prepare(arrays.vertex_position, None, True)
     assert np.all(plain.response.normal_stiffness == 5e9) and np.all(plain.response.shear_stiffness == 2e9)
 
 
@@ -76,7 +77,7 @@ def test_a_corner_on_a_face_stands_for_the_smallest_share_at_its_corner():
     m.add_block(np.array([[0, 0], [1, 0], [1, 1], [0, 1]]) @ np.array([[c, -s], [s, c]]).T + [0, 0.001], "rock")
     arrays = m.arrays()
     step = ContactModel(arrays, ContactParameters(1e9, 4e8, 0.02, np.radians(3.0), 0.008)).prepare(
-        arrays.vertices, None, True)
+        arrays.vertex_position, None, True)
     assert len(step.record) == 1 and step.record.bond[0] == 0.0
     assert step.record.tributary[0] == pytest.approx(0.5, rel=1e-12)
 

@@ -231,7 +231,7 @@ def test_cut_blocks_go_straight_into_a_model():
     idx = add_cut_polyhedra(model, cut, {0: "rock", 1: "base"}, fixed=fixed)
     assert idx == list(range(cut.n_blocks))
     arrays = model.arrays()
-    volume = arrays.moments(arrays.vertices).volume
+    volume = arrays.moments(arrays.vertex_position).volume
     assert volume == pytest.approx(cut.volumes(), rel=1e-12)  # the same blocks, renumbered faces at most
     assert np.array_equal(arrays.block_fixed, fixed) and np.array_equal(arrays.block_material, cut.block_part)
     with pytest.raises(ModelError, match=r"part\(s\) \[1\]"):

@@ -32,7 +32,7 @@ def _model(top_joint: str | None) -> srdda.Model:
 def test_a_contact_on_a_face_takes_the_face_joint_material(top_joint, friction):
     arrays = _model(top_joint).arrays()
     contacts = ContactModel(arrays, ContactParameters(1e10, 4e9, 0.01, np.radians(3.0), 0.004))
-    step = contacts.prepare(arrays.vertices, None, True)
+    step = contacts.prepare(arrays.vertex_position, None, True)
     # the block's four bottom corners touch the plane's top face: each contact's friction is the face's
     np.testing.assert_allclose(step.response.friction, np.tan(np.radians(friction)), rtol=1e-15)
 

@@ -14,11 +14,11 @@ def test_load_converts_units_and_resolves_blocks():
     model, settings = load_model(DATA / "two_blocks.toml")
     a = model.arrays()
     assert settings.dt == pytest.approx(2e-3) and settings.method == "dda1" and settings.penalty == 1e9
-    assert a.density[0] == 2500.0 and model.materials["rock"].young == 1e10
-    assert a.point_block[a.fixed_rows].tolist() == [0]  # located by coordinates
-    assert a.point_block[a.spring_rows_b].tolist() == [1]  # by index
-    assert a.point_block[a.measured_rows].tolist() == [1]
-    assert a.loads[0](0.02) == pytest.approx([500.0, 0.0])  # linear interpolation of the table
+    assert a.block_density[0] == 2500.0 and model.materials["rock"].young == 1e10
+    assert a.attached.point_block[a.attached.fixed_rows].tolist() == [0]  # located by coordinates
+    assert a.attached.point_block[a.attached.point_spring_rows_b].tolist() == [1]  # by index
+    assert a.attached.point_block[a.attached.measured_rows].tolist() == [1]
+    assert a.attached.load_force[0](0.02) == pytest.approx([500.0, 0.0])  # linear interpolation of the table
 
 
 def test_round_trip_gives_the_same_model(tmp_path):
@@ -27,8 +27,10 @@ def test_round_trip_gives_the_same_model(tmp_path):
     model2, settings2 = load_model(tmp_path / "copy.toml")
     a, b = model.arrays(), model2.arrays()
     assert settings2 == settings
-    for name in ("vertices", "block_ptr", "density", "elasticity", "velocity", "points", "point_block"):
+    for name in ("vertex_position", "block_ptr", "block_density", "block_elasticity", "block_velocity"):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    for name in ("point_position", "point_block"):
+        assert np.array_equal(getattr(a.attached, name), getattr(b.attached, name)), name
 
 
 def test_model_file_runs():

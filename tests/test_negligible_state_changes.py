@@ -47,7 +47,7 @@ def test_tolerance_moves_the_wall_no_more_than_round_off_does(runs):
     exact = runs["exact"].final_state.vertices
     spread = float(np.abs(runs["perturbed"].final_state.vertices - exact).max())
     moved = float(np.abs(runs["default"].final_state.vertices - exact).max())
-    settled = float(np.abs(exact - brick_wall(SIZE, SIZE)[0].arrays().vertices).max())
+    settled = float(np.abs(exact - brick_wall(SIZE, SIZE)[0].arrays().vertex_position).max())
     assert spread < 0.05 * settled  # the spread is a small part of the motion (measured 1.2e-6)
     # 1e-4 of the settlement (measured 1.4e-5): the tolerance adds no error of its own that matters
     assert moved <= 1e-4 * settled, (moved, settled)

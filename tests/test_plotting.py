@@ -101,7 +101,7 @@ def test_rockfall_draws_slope_and_paths() -> None:
     model = two_block_model()
     runs = {m: srdda.run(model, srdda.RunSettings(dt=1e-3, n_steps=50, method=m)) for m in METHODS}
     arrays = model.arrays()
-    fig = plotting.fig_rockfall(runs, background=(arrays.vertices, arrays.block_ptr))
+    fig = plotting.fig_rockfall(runs, background=(arrays.vertex_position, arrays.block_ptr))
     for ax in fig.axes:
         assert len(ax.collections) == 1 and len(_data_lines(ax)) == 2
     _check(fig, 3)
@@ -113,8 +113,9 @@ def test_configuration_marks_supports_loads_and_measured_points() -> None:
     ax = fig.axes[0]
     labels = [ln.get_label() for ln in ax.get_lines()]
     assert labels == ["fixed point", "point load", "measured point"]
-    np.testing.assert_array_equal(ax.get_lines()[0].get_xydata(), arrays.points[arrays.fixed_rows])
-    np.testing.assert_array_equal(ax.collections[0].get_paths()[0].vertices[:4], arrays.vertices)
+    attached = arrays.attached
+    np.testing.assert_array_equal(ax.get_lines()[0].get_xydata(), attached.point_position[attached.fixed_rows])
+    np.testing.assert_array_equal(ax.collections[0].get_paths()[0].vertices[:4], arrays.vertex_position)
     assert [t.get_text() for t in ax.texts] == ["P0"]
     _check(fig, 1)
 

@@ -16,13 +16,15 @@ def _model():
 
 def test_two_runs_are_identical_and_leave_the_model_alone():
     arrays = _model().arrays()
-    before = {k: v.copy() for k, v in arrays.__dict__.items() if isinstance(v, np.ndarray)}
+    records = {"": arrays, "attached.": arrays.attached}  # the model's arrays and its attached points'
+    before = {(r, k): v.copy() for r, record in records.items() for k, v in record.__dict__.items()
+              if isinstance(v, np.ndarray)}
     s = srdda.RunSettings(dt=1e-3, n_steps=50, method="srdda")
     r1, r2 = srdda.run(arrays, s), srdda.run(arrays, s)
     assert np.array_equal(r1.array("centroid"), r2.array("centroid"))
     assert np.array_equal(r1.array("velocity"), r2.array("velocity"))
-    for k, v in before.items():
-        assert np.array_equal(getattr(arrays, k), v), k
+    for (r, k), v in before.items():
+        assert np.array_equal(getattr(records[r], k), v), r + k
 
 
 def test_continuing_from_a_state_equals_one_long_run():

@@ -2,13 +2,15 @@
 vertex and measured-point histories in the in-memory Result, block masses, named energy columns."""
 from __future__ import annotations
 
+from operator import attrgetter
+
 import numpy as np
 import pytest
 
 import srdda
 from srdda.geometry.polyhedron import box
 from srdda.ledger import ENERGY_NAMES
-from srdda.model import ModelError
+from srdda.model import RENAMED_FIELDS, ModelError
 
 G = 9.81
 
@@ -23,7 +25,7 @@ def test_add_box_is_the_box_polyhedron_and_its_mass_is_density_times_volume() ->
     a, b = _rock(3), _rock(3)
     a.add_box((0, 0, 0), (1, 2, 3), "rock", name="b")
     b.add_polyhedron(*box((0, 0, 0), (1, 2, 3)), "rock", name="b")
-    np.testing.assert_array_equal(a.arrays().vertices, b.arrays().vertices)
+    np.testing.assert_array_equal(a.arrays().vertex_position, b.arrays().vertex_position)
     np.testing.assert_allclose(a.block_masses(), [2500.0 * 6.0], rtol=1e-12)
     with pytest.raises(ModelError, match="hi > lo"):
         a.add_box((0, 0, 0), (1, -1, 1), "rock")
@@ -101,3 +103,25 @@ def test_the_result_keeps_vertex_and_measured_point_histories_and_energy_names()
     np.testing.assert_array_equal(energies["kinetic"], res.array("energy")[:, res.energy_names.index("kinetic")])
     no_vertices = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=2, method="srdda"), keep_vertices=False)
     assert no_vertices.array("vertices").shape == (3, 0, 2)
+
+
+def test_the_model_arrays_names_of_srdda_0_1_still_read_with_a_deprecation_warning() -> None:
+    m = _rock()
+    m.add_block([[0, 0], [2, 0], [2, 1], [0, 1]], "rock", name="a")
+    m.add_block([[3, 0], [4, 0], [4, 1], [3, 1]], "rock", name="b")
+    m.add_fixed_point([0.5, 0.5], stiffness=1e9)
+    m.add_point_load([1.5, 0.5], [0.0, -1e3])
+    m.add_point_spring([1.0, 1.0], [3.5, 1.0], 1e6)
+    m.add_measured_point([3.5, 0.5])
+    arrays = m.arrays()
+    assert len(RENAMED_FIELDS) == 18
+    for old, new in RENAMED_FIELDS.items():
+        with pytest.warns(DeprecationWarning, match=rf"ModelArrays\.{old} is deprecated .*: use ModelArrays\.{new}$"):
+            value = getattr(arrays, old)
+        assert value is attrgetter(new)(arrays), old  # the same array, not a copy
+    # the point rows as srdda 0.1 laid them out: fixed points, loads, spring ends a, ends b, measured points
+    with pytest.warns(DeprecationWarning):
+        rows = [arrays.fixed_rows, arrays.load_rows, arrays.spring_rows_a, arrays.spring_rows_b, arrays.measured_rows]
+    assert [r.tolist() for r in rows] == [[0], [1], [2], [3], [4]]
+    with pytest.raises(AttributeError):
+        arrays.vertices = arrays.vertex_position  # read-only

@@ -16,6 +16,8 @@ import pytest
 import srdda
 from srdda.io.results_store import (ResultsFileError, ResultsStore, load_checkpoint, model_arrays_from_file,
                                     read_results, resume)
+from srdda.io.results_reader import MODEL_DATASETS
+from srdda.model import RENAMED_FIELDS, AttachedPoints, ModelArrays
 from results_models import ROD_SOURCE, rod_model, rod_settings, two_block_model
 
 STATE_FIELDS = ("vertices", "points", "velocity", "acceleration", "stress", "rotation")
@@ -60,15 +62,29 @@ def test_stored_model_rebuilds_the_model_arrays(tmp_path: Path) -> None:
     path = tmp_path / "rod.h5"
     srdda.run(model, settings, recorders=[ResultsStore(path, settings, model_text="# the model file")])
     original, rebuilt = model.arrays(), model_arrays_from_file(path)
-    for name, value in vars(original).items():
-        if isinstance(value, np.ndarray):
-            np.testing.assert_array_equal(getattr(rebuilt, name), value, err_msg=name)
+    for record, again in ((original, rebuilt), (original.attached, rebuilt.attached)):
+        for name, value in vars(record).items():
+            if isinstance(value, np.ndarray):
+                np.testing.assert_array_equal(getattr(again, name), value, err_msg=name)
     assert rebuilt.block_names == original.block_names
     for t in (0.0, 0.3, 2.0):  # the table load survives the round trip
-        np.testing.assert_array_equal(rebuilt.loads[0](t), original.loads[0](t))
+        np.testing.assert_array_equal(rebuilt.attached.load_force[0](t), original.attached.load_force[0](t))
     assert read_results(path).model_text == "# the model file"
     with h5py.File(path) as f:
         assert {"numpy", "h5py", "hdf5", "srdda", "python"} <= set(f["versions"].attrs)
+
+
+def test_the_stored_model_keeps_the_dataset_names_of_srdda_0_1() -> None:
+    # every array of ModelArrays and of its attached points has a dataset (else a file would silently lose it),
+    # named as srdda 0.1 named the field (so that files of either version read in the other)
+    def arrays_of(record: type, prefix: str = "") -> set[str]:
+        return {prefix + f.name for f in dataclasses.fields(record) if str(f.type).startswith("np.ndarray")}
+
+    assert set(MODEL_DATASETS.values()) == arrays_of(ModelArrays) | arrays_of(AttachedPoints, "attached.")
+    for old, new in RENAMED_FIELDS.items():
+        assert MODEL_DATASETS.get(old, new) == new, old  # "loads" (a tuple of histories) is an attribute
+    unchanged = set(MODEL_DATASETS) - set(RENAMED_FIELDS)
+    assert all(MODEL_DATASETS[name] == name for name in unchanged)
 
 
 def test_a_callable_load_needs_the_model_to_resume(tmp_path: Path) -> None:

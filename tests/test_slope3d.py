@@ -36,7 +36,7 @@ def test_toppling_acceleration_against_the_model_geometry(case):
     # that edge, both from the built polyhedron (exact moments, parallel-axis theorem)
     model = slide_topple_model(case)
     arrays = model.arrays()
-    mom = arrays.moments(arrays.vertices)
+    mom = arrays.moments(arrays.vertex_position)
     volume, centroid, second = mom.volume[0], mom.centroid[0], mom.second[0]
     block = model.blocks[0].vertices
     p = np.radians(case.psi)
@@ -130,7 +130,7 @@ def test_wedge_model_geometry():
     v = wedge.vertices[np.argsort(wedge.vertices[:, 2])]
     assert v[0] == pytest.approx([0, 0, 0], abs=tol) and v[1:, 2] == pytest.approx([6.0] * 3)
     arrays = model.arrays()
-    assert arrays.moments(arrays.vertices).volume[0] == pytest.approx(
+    assert arrays.moments(arrays.vertex_position).volume[0] == pytest.approx(
         abs(np.linalg.det(v[1:] - v[0])) / 6.0, rel=1e-12)
     assert arrays.block_fixed.tolist() == [False, True, True]
 
@@ -142,6 +142,6 @@ def test_block_on_incline_model_rests_on_its_slab():
     assert np.sort(block.vertices @ n) == pytest.approx([0.0] * 4 + [2.0] * 4, abs=1e-14)
     assert np.max(slab.vertices @ n) == pytest.approx(0.0, abs=1e-14)
     arrays = model.arrays()
-    assert arrays.moments(arrays.vertices).volume[0] == pytest.approx(3.0, rel=1e-14)
+    assert arrays.moments(arrays.vertex_position).volume[0] == pytest.approx(3.0, rel=1e-14)
     assert arrays.block_fixed.tolist() == [False, True]
     assert model.joint_materials["joint"].friction_angle == 20.0

@@ -214,10 +214,10 @@ def test_contacts_on_a_crack_take_the_cracks_water_not_the_tables():
     model.set_water(level=5.0, cracks=[(bottom, (1.0, 0.0), 0.5)])
     arrays = model.arrays()
     settings = RunSettings(dt=1e-3, n_steps=1, penalty=1e10)
-    contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertices)))
-    step = contacts.prepare(arrays.vertices, None, True)
+    contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertex_position)))
+    step = contacts.prepare(arrays.vertex_position, None, True)
     assert step is not None and arrays.water is not None
-    force = contact_water(arrays.water, step.record, contacts.params.distance, arrays.vertices,
+    force = contact_water(arrays.water, step.record, contacts.params.distance, arrays.vertex_position,
                           boundary_simplices(arrays))
     on_crack = np.abs(step.record.normal[:, 0]) > 0.999
     assert on_crack.any() and (~on_crack).any()
@@ -255,13 +255,14 @@ def test_a_wedge_gets_the_water_on_each_plane(level):
     model.set_water(level=level)
     arrays = model.arrays()
     settings = RunSettings(dt=1e-3, n_steps=1, penalty=1e11)
-    contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertices)))
-    step = contacts.prepare(arrays.vertices, None, True)
+    contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertex_position)))
+    step = contacts.prepare(arrays.vertex_position, None, True)
     assert step is not None and arrays.water is not None
     record = step.record
-    force = contact_water(arrays.water, record, contacts.params.distance, arrays.vertices, boundary_simplices(arrays))
+    force = contact_water(arrays.water, record, contacts.params.distance, arrays.vertex_position,
+                          boundary_simplices(arrays))
     mesh = arrays.mesh
-    x = arrays.vertices[mesh.tri[mesh.tri_block == 0]]
+    x = arrays.vertex_position[mesh.tri[mesh.tri_block == 0]]
     areas = area_vectors(x)
     integral, _ = submerged_integrals(x, level - x[..., 2])
     for plane in (1, 2):

@@ -249,8 +249,8 @@ def check_command(model: str) -> None:
     arrays = _compile(mdl, settings, model)
     length = f"{settings.n_steps} steps" if settings.n_steps is not None else f"until t = {settings.end_time} s"
     stages = f"; stages: {', '.join(f'{p.name} ({p.kind})' for p in arrays.stages)}" if arrays.stages else ""
-    click.echo(f"ok: {arrays.n_blocks} blocks ({arrays.block_type.dim}D), {len(arrays.vertices)} vertices, method "
-               f"{settings.method}, {length} of {settings.dt} s{stages}")
+    click.echo(f"ok: {arrays.n_blocks} blocks ({arrays.block_type.dim}D), {len(arrays.vertex_position)} vertices, "
+               f"method {settings.method}, {length} of {settings.dt} s{stages}")
 
 
 @main.command("show")

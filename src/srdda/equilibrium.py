@@ -85,8 +85,8 @@ def unbalanced_forces(arrays: ModelArrays, before: State, after: State, coeffs: 
 def applied_forces(arrays: ModelArrays, t: float) -> np.ndarray:
     """|weight + point loads| (nb,) of every block at time t."""
     force = arrays.block_mass[:, None] * arrays.gravity[None, :]
-    if len(arrays.loads):
-        np.add.at(force, arrays.point_block[arrays.load_rows], point_load_forces(arrays, t))
+    if len(arrays.attached.load_force):
+        np.add.at(force, arrays.attached.point_block[arrays.attached.load_rows], point_load_forces(arrays, t))
     return np.linalg.norm(force, axis=1)
 
 

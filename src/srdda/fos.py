@@ -163,7 +163,7 @@ def settle_displacements(arrays: ModelArrays, settings: RunSettings, criterion: 
     dt = settle_dt(arrays, settings, criterion)
     static = replace(settings, velocity_ratio=0.0, contact_solver=criterion.contact_solver, dt=dt,
                      n_steps=criterion.steps, end_time=None, record_every=1, min_dt=None)
-    at_rest = replace(arrays, velocity=np.zeros_like(arrays.velocity))  # the model's initial velocities left out
+    at_rest = replace(arrays, block_velocity=np.zeros_like(arrays.block_velocity))  # the initial velocities left out
     result = run_single(at_rest, static, keep_vertices=False)  # the model as built (its stages left aside)
     movable = ~arrays.block_fixed
     centroid = result.array("centroid")[:, movable]

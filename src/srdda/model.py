@@ -6,10 +6,12 @@ that the time loop uses. Units are SI: m, kg, s, N, Pa.
 """
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import TYPE_CHECKING, Literal
+from operator import attrgetter
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import shapely
@@ -29,7 +31,8 @@ from .kinematics.update3d import rotate_symmetric_components_3d
 if TYPE_CHECKING:
     from .stages import Stage, StagePlan
 
-__all__ = ["JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
+__all__ = ["AttachedPoints", "JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load",
+           "elasticity_matrix"]
 
 
 class ModelError(ValueError):
@@ -152,42 +155,66 @@ class _Block:
 
 
 @dataclass(frozen=True)
+class AttachedPoints:
+    """The points attached to blocks, one row each, and which rows are which (see :meth:`Model.arrays`).
+
+    Shapes for a 2D model; a 3D model's points have 3 coordinates. The rows
+    are, in order: the fixed points, the point loads, the point springs'
+    ends a, their ends b, the measured points, then the points of the links
+    (hinges, springs with dashpots, driven points, bolts), whose rows
+    :class:`~srdda.constraints.data.ConstraintArrays` holds. The time loop
+    moves every row with its block (``State.points``).
+    """
+
+    point_position: np.ndarray  # (np, 2) 2D, (np, 3) 3D: m, where each point is in the model as built
+    point_block: np.ndarray  # (np,) int: the block carrying each point
+    fixed_rows: np.ndarray  # (nfix,) int: the fixed points (pinned by a penalty spring to where they start)
+    fixed_stiffness: np.ndarray  # (nfix,) N/m; nan: the run's penalty
+    load_rows: np.ndarray  # (nload,) int: the points a point load acts at
+    load_force: tuple[Load, ...]  # (nload,): each load's force (N, 2 components in 2D, 3 in 3D) against time
+    point_spring_rows_a: np.ndarray  # (nps,) int: end a of each point spring (zero length, Model.add_point_spring)
+    point_spring_rows_b: np.ndarray  # (nps,) int: its end b
+    point_spring_stiffness: np.ndarray  # (nps,) N/m
+    measured_rows: np.ndarray  # (nmp,) int: the measured points (recorded every step)
+
+
+@dataclass(frozen=True)
 class ModelArrays:
     """The model as flat arrays for the time loop (see :meth:`Model.arrays`).
 
-    ``points`` (np, 2) are the block-attached points (fixed, load, spring ends,
-    measured), owned by ``point_block``; index arrays say which row is which.
+    Fields are named ``object_field`` (as MuJoCo's ``mjModel``): the prefix
+    says what the rows are (``block_``: nb blocks, ``vertex_``: nv vertices,
+    ``edge_``: the nv edges of 2D blocks, ``face_``: nf faces of 3D blocks,
+    ``material_``: nm block materials); shapes are given for 2D, then 3D.
+    The points attached to blocks (fixed, loaded, tied by point springs,
+    measured, and the links' points) are the record ``attached``; hinges,
+    springs with dashpots, driven points and bolts the record ``links``;
+    the joint materials the record ``joints``.
     """
 
-    vertices: np.ndarray
-    block_ptr: np.ndarray
-    density: np.ndarray  # (nb,)
-    elasticity: np.ndarray  # (nb, 3, 3)
-    velocity: np.ndarray  # (nb, 6)
-    stress: np.ndarray  # (nb, 3)
-    gravity: np.ndarray  # (2,)
-    points: np.ndarray
-    point_block: np.ndarray
-    fixed_rows: np.ndarray
-    fixed_stiffness: np.ndarray  # nan = use the run's penalty
-    load_rows: np.ndarray
-    loads: tuple[Load, ...]
-    spring_rows_a: np.ndarray
-    spring_rows_b: np.ndarray
-    spring_stiffness: np.ndarray
-    measured_rows: np.ndarray
-    block_names: tuple[str, ...]
-    vertex_block: np.ndarray  # (nv,) owner block of each vertex
-    next_vertex: np.ndarray  # (nv,) next vertex of the same block
-    compliance: np.ndarray  # (nb, 3, 3) = inverse of elasticity
+    # -- blocks and their vertices
+    vertex_position: np.ndarray  # (nv, 2) 2D, (nv, 3) 3D: m, every block's vertices, block after block
+    block_ptr: np.ndarray  # (nb + 1,) int: block i's vertices are rows block_ptr[i]:block_ptr[i + 1]
+    vertex_block: np.ndarray  # (nv,) int: the block of each vertex
+    vertex_next: np.ndarray  # (nv,) int: the next vertex of the same block, cyclically (2D: counter-clockwise)
+    block_density: np.ndarray  # (nb,) kg/m³ as built (block_mass is conserved)
+    block_elasticity: np.ndarray  # (nb, 3, 3) 2D (plane stress or strain), (nb, 6, 6) 3D: Pa, stress = D·strain
+    block_compliance: np.ndarray  # (nb, 3, 3) 2D, (nb, 6, 6) 3D: 1/Pa, the inverse of block_elasticity
+    block_velocity: np.ndarray  # (nb, 6) 2D (vx, vy, ω, 3 strain rates 0), (nb, 12) 3D (v, ω, 6 zeros): initial
+    block_stress: np.ndarray  # (nb, 3) 2D (σx, σy, τxy), (nb, 6) 3D (σx, σy, σz, τyz, τzx, τxy): initial, Pa
     block_fixed: np.ndarray  # (nb,) bool: the block does not move (ground, slope)
-    block_material: np.ndarray  # (nb,) index into the model's materials
-    edge_joint: np.ndarray  # (nv,) joint material of the edge starting at each vertex, -1 = by materials
-    joints: JointTable  # the joint materials, row 0 the default joint
-    joint_by_materials: np.ndarray  # (nm, nm) joint index for a pair of block materials
-    links: ConstraintArrays  # hinges, springs, prescribed motion
-    mesh: PolyhedronMesh | None = None  # the faces of 3D blocks (None in 2D)
-    face_joint: np.ndarray | None = None  # (nf,) joint material of each mesh face, -1 = by materials (3D)
+    block_material: np.ndarray  # (nb,) int: index into the model's materials
+    block_names: tuple[str, ...]  # (nb,)
+    gravity: np.ndarray  # (2,) 2D, (3,) 3D: m/s²
+    # -- joints
+    joints: JointTable  # (nj rows): the joint materials, row 0 the default joint
+    material_joint: np.ndarray  # (nm, nm) int: the joint row of a contact between two block materials
+    edge_joint: np.ndarray  # (nv,) int: joint row of the edge vertex -> vertex_next, -1: by materials (3D: all -1)
+    # -- points and links
+    attached: AttachedPoints  # fixed points, point loads, point springs, measured points (rows of np points)
+    links: ConstraintArrays  # hinges, springs with dashpots, driven points, bolts (rows of attached points)
+    mesh: PolyhedronMesh | None = None  # the faces (nf) of 3D blocks; None in 2D
+    face_joint: np.ndarray | None = None  # (nf,) int 3D: joint row of each mesh face, -1: by materials; None 2D
     water: WaterTable | None = None  # the water table (docs/water.md); change it with dataclasses.replace
     block_removed: np.ndarray | None = None  # (nb,) bool: excavated by a stage (held, touches nothing); None: none
     stages: tuple[StagePlan, ...] = ()  # the staged analysis (srdda.stages), resolved; () runs as one stage
@@ -204,18 +231,46 @@ class ModelArrays:
         Mass is conserved: when a method changes a block's volume (dda0's rotation
         stretch, elastic strain) its density changes, not its mass.
         """
-        return self.density * self.moments(self.vertices).volume
+        return self.block_density * self.moments(self.vertex_position).volume
 
     @property
     def block_type(self) -> BlockType:
         """The blocks' type, by the dimension of the vertices."""
-        return block_type_of_dimension(self.vertices.shape[1])
+        return block_type_of_dimension(self.vertex_position.shape[1])
 
     def moments(self, vertices: np.ndarray) -> BlockMoments | PolyhedronMoments:
         """Exact block integrals of a configuration of this model's blocks (polygons, or polyhedra in 3D)."""
         if self.mesh is not None:
             return polyhedron_moments(vertices, self.mesh)
-        return block_moments(vertices, self.block_ptr, self.vertex_block, self.next_vertex)
+        return block_moments(vertices, self.block_ptr, self.vertex_block, self.vertex_next)
+
+
+# ModelArrays' field names of srdda 0.1 -> where the value is now: read-only, deprecated for one release
+RENAMED_FIELDS = {
+    "vertices": "vertex_position", "next_vertex": "vertex_next", "density": "block_density",
+    "elasticity": "block_elasticity", "compliance": "block_compliance", "velocity": "block_velocity",
+    "stress": "block_stress", "joint_by_materials": "material_joint", "points": "attached.point_position",
+    "point_block": "attached.point_block", "fixed_rows": "attached.fixed_rows",
+    "fixed_stiffness": "attached.fixed_stiffness", "load_rows": "attached.load_rows", "loads": "attached.load_force",
+    "spring_rows_a": "attached.point_spring_rows_a", "spring_rows_b": "attached.point_spring_rows_b",
+    "spring_stiffness": "attached.point_spring_stiffness", "measured_rows": "attached.measured_rows",
+}
+
+
+def _deprecated_field(old: str, new: str) -> property:
+    """A read-only property ``old`` of ModelArrays giving ``new`` (a dotted path) with a DeprecationWarning."""
+    get = attrgetter(new)
+
+    def value(self: ModelArrays) -> object:
+        warnings.warn(f"ModelArrays.{old} is deprecated (renamed in srdda 0.2, removed in 0.3): use "
+                      f"ModelArrays.{new}", DeprecationWarning, stacklevel=2)
+        return get(self)
+
+    return property(value, doc=f"Deprecated: ModelArrays.{new}.")
+
+
+for _old, _new in RENAMED_FIELDS.items():  # set after the class so that type checkers flag the old names
+    setattr(ModelArrays, _old, _deprecated_field(_old, _new))
 
 
 @dataclass
@@ -767,7 +822,7 @@ class Model:
 
     # -- compiling ---------------------------------------------------------
     def arrays(self) -> ModelArrays:
-        """Flat arrays of the whole model for the time loop."""
+        """Flat arrays of the whole model for the time loop: its block, joint and point parts."""
         from .stages import resolve_stages  # stages name blocks, bolts and materials of this model
 
         if not self.blocks:
@@ -776,8 +831,79 @@ class Model:
         _finite(self.gravity, "gravity")
         if len(self.gravity) != bt.dim:
             raise ModelError(f"gravity must have {bt.dim} components in a {bt.dim}D model, got {len(self.gravity)}")
+        arrays = ModelArrays(
+            **self._block_arrays(bt),
+            gravity=np.asarray(self.gravity, dtype=float),
+            **self._joint_arrays(),
+            **self._point_arrays(bt),
+            water=self.water,
+            stages=resolve_stages(self, self.stages) if self.stages else (),
+        )
+        self._check_held(arrays)
+        self._check_water(arrays)
+        return arrays
+
+    def _block_arrays(self, bt: BlockType) -> dict[str, Any]:
+        """The blocks' and vertices' fields of :class:`ModelArrays` (and the 3D mesh); checks 2D overlaps."""
         mats = list(self.materials.values())
         counts = [len(b.vertices) for b in self.blocks]
+        block_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        if bt is SOLID:
+            elasticity = np.array([elasticity_matrix_3d(mats[b.material].young, mats[b.material].poisson)
+                                   for b in self.blocks])
+            mesh = PolyhedronMesh.from_blocks([(b.vertices, b.faces) for b in self.blocks],
+                                              [b.name for b in self.blocks])
+        else:
+            elasticity = np.array([elasticity_matrix(mats[b.material]) for b in self.blocks])
+            mesh = None
+        velocity = np.zeros((len(self.blocks), bt.ndof))
+        velocity[:, : bt.rotation.stop] = [b.velocity for b in self.blocks]
+        vertices = np.concatenate([b.vertices for b in self.blocks])
+        if bt is PLANE and not self.allow_overlap:
+            self._check_overlaps(vertices, block_ptr)
+        return dict(
+            vertex_position=vertices,
+            block_ptr=block_ptr,
+            vertex_block=np.repeat(np.arange(len(counts)), counts),
+            vertex_next=next_vertex_index(block_ptr),
+            block_density=np.array([mats[b.material].density for b in self.blocks]),
+            block_elasticity=elasticity,
+            block_compliance=np.linalg.inv(elasticity),
+            block_velocity=velocity,
+            block_stress=np.array([b.stress for b in self.blocks], dtype=float),
+            block_fixed=np.array([b.fixed for b in self.blocks], dtype=bool),
+            block_material=np.array([b.material for b in self.blocks], dtype=np.int64),
+            block_names=tuple(b.name for b in self.blocks),
+            mesh=mesh,
+        )
+
+    def _joint_arrays(self) -> dict[str, Any]:
+        """The joints' fields of :class:`ModelArrays`: the joint table and which row each contact takes."""
+        joint_names = list(self.joint_materials)
+        mat_names = list(self.materials)
+        by_mats = np.zeros((len(mat_names), len(mat_names)), dtype=np.int64)
+        for (a, b), name in self.joint_map.items():
+            ia, ib = mat_names.index(a), mat_names.index(b)
+            by_mats[ia, ib] = by_mats[ib, ia] = joint_names.index(name) + 1
+
+        def joint_rows(named: tuple[str | None, ...] | None, n: int) -> np.ndarray:
+            """Rows of the joint table named per edge or face, -1 where the block materials choose."""
+            return np.full(n, -1) if named is None else np.array([-1 if j is None else joint_names.index(j) + 1
+                                                                   for j in named])
+
+        edge_joint = np.concatenate([joint_rows(b.edge_joints, len(b.vertices)) for b in self.blocks]
+                                    ).astype(np.int64)
+        face_joint = None if self.dim != SOLID.dim else np.concatenate(
+            [joint_rows(b.face_joints, len(b.faces or ())) for b in self.blocks]).astype(np.int64)
+        return dict(
+            joints=JointTable.of([self.default_joint, *self.joint_materials.values()]),
+            material_joint=by_mats,
+            edge_joint=edge_joint,
+            face_joint=face_joint,
+        )
+
+    def _point_arrays(self, bt: BlockType) -> dict[str, Any]:
+        """The points' fields of :class:`ModelArrays`: the attached points and the links that use them."""
         groups: list[list[np.ndarray]] = [[], [], [], [], []]
         owners: list[list[int]] = [[], [], [], [], []]
         for b, p, _ in self.fixed_points:
@@ -800,82 +926,27 @@ class Model:
         pts = np.array([p for g in groups for p in g], dtype=float).reshape(-1, bt.dim)
         link_pts, link_owners, links = compile_links(self.hinges, self.springs, self.prescribed,
                                                      self.base_acceleration, len(pts), bt.dim, self.bolts)
-        pts = np.concatenate([pts, link_pts])
-        block_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        if bt is SOLID:
-            elasticity = np.array([elasticity_matrix_3d(mats[b.material].young, mats[b.material].poisson)
-                                   for b in self.blocks])
-            mesh = PolyhedronMesh.from_blocks([(b.vertices, b.faces) for b in self.blocks],
-                                              [b.name for b in self.blocks])
-        else:
-            elasticity = np.array([elasticity_matrix(mats[b.material]) for b in self.blocks])
-            mesh = None
-        velocity = np.zeros((len(self.blocks), bt.ndof))
-        velocity[:, : bt.rotation.stop] = [b.velocity for b in self.blocks]
-        point_block = np.concatenate([np.array([o for g in owners for o in g], dtype=np.int64), link_owners])
-        joint_names = list(self.joint_materials)
-        joints = [self.default_joint, *self.joint_materials.values()]
-        mat_names = list(self.materials)
-        by_mats = np.zeros((len(mat_names), len(mat_names)), dtype=np.int64)
-        for (a, b), name in self.joint_map.items():
-            ia, ib = mat_names.index(a), mat_names.index(b)
-            by_mats[ia, ib] = by_mats[ib, ia] = joint_names.index(name) + 1
-        def joint_rows(named: tuple[str | None, ...] | None, n: int) -> np.ndarray:
-            """Rows of the joint table named per edge or face, -1 where the block materials choose."""
-            return np.full(n, -1) if named is None else np.array([-1 if j is None else joint_names.index(j) + 1
-                                                                   for j in named])
-
-        edge_joint = np.concatenate([joint_rows(b.edge_joints, len(b.vertices)) for b in self.blocks]
-                                    ).astype(np.int64)
-        face_joint = None if mesh is None else np.concatenate(
-            [joint_rows(b.face_joints, len(b.faces)) for b in self.blocks]).astype(np.int64)
-        vertices = np.concatenate([b.vertices for b in self.blocks])
-        if bt is PLANE and not self.allow_overlap:
-            self._check_overlaps(vertices, block_ptr)
-        arrays = ModelArrays(
-            vertices=vertices,
-            block_ptr=block_ptr,
-            density=np.array([mats[b.material].density for b in self.blocks]),
-            elasticity=elasticity,
-            velocity=velocity,
-            stress=np.array([b.stress for b in self.blocks], dtype=float),
-            gravity=np.asarray(self.gravity, dtype=float),
-            points=pts,
-            point_block=point_block,
+        attached = AttachedPoints(
+            point_position=np.concatenate([pts, link_pts]),
+            point_block=np.concatenate([np.array([o for g in owners for o in g], dtype=np.int64), link_owners]),
             fixed_rows=rows[0],
             fixed_stiffness=np.array([k for _, _, k in self.fixed_points], dtype=float),
             load_rows=rows[1],
-            loads=tuple(ld for _, _, ld in self.point_loads),
-            spring_rows_a=rows[2],
-            spring_rows_b=rows[3],
-            spring_stiffness=np.array([k for *_, k in self.point_springs], dtype=float),
+            load_force=tuple(ld for _, _, ld in self.point_loads),
+            point_spring_rows_a=rows[2],
+            point_spring_rows_b=rows[3],
+            point_spring_stiffness=np.array([k for *_, k in self.point_springs], dtype=float),
             measured_rows=rows[4],
-            block_names=tuple(b.name for b in self.blocks),
-            vertex_block=np.repeat(np.arange(len(counts)), counts),
-            next_vertex=next_vertex_index(block_ptr),
-            compliance=np.linalg.inv(elasticity),
-            block_fixed=np.array([b.fixed for b in self.blocks], dtype=bool),
-            block_material=np.array([b.material for b in self.blocks], dtype=np.int64),
-            edge_joint=edge_joint,
-            joints=JointTable.of(joints),
-            joint_by_materials=by_mats,
-            links=links,
-            mesh=mesh,
-            face_joint=face_joint,
-            water=self.water,
-            stages=resolve_stages(self, self.stages) if self.stages else (),
         )
-        self._check_held(arrays)
-        self._check_water(arrays)
-        return arrays
+        return dict(attached=attached, links=links)
 
     def _check_water(self, arrays: ModelArrays) -> None:
         """ModelError naming a water table of another dimension or a crack on which no moving block's face lies."""
         if self.water is None:
             return
-        if len(self.water.point) != arrays.vertices.shape[1]:
+        if len(self.water.point) != arrays.vertex_position.shape[1]:
             raise ModelError(f"water: the table is {len(self.water.point)}D, the model "
-                             f"{arrays.vertices.shape[1]}D (set the gravity before the water)")
+                             f"{arrays.vertex_position.shape[1]}D (set the gravity before the water)")
         for i, crack in enumerate(self.water.cracks):
             try:
                 crack_facets(arrays, crack)

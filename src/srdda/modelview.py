@@ -38,13 +38,13 @@ def _joint_edges(arrays: ModelArrays) -> dict[int, np.ndarray]:
     out: dict[int, list[np.ndarray]] = {}
     if arrays.mesh is None:
         for v in np.flatnonzero(arrays.edge_joint >= 0):
-            out.setdefault(int(arrays.edge_joint[v]), []).append(arrays.vertices[[v, arrays.next_vertex[v]]])
+            out.setdefault(int(arrays.edge_joint[v]), []).append(arrays.vertex_position[[v, arrays.vertex_next[v]]])
     elif arrays.face_joint is not None:
         mesh = arrays.mesh
         for f in np.flatnonzero(arrays.face_joint >= 0):
             ring = mesh.face_vertex[mesh.face_ptr[f]:mesh.face_ptr[f + 1]]
             for a, b in zip(ring, np.roll(ring, -1)):
-                out.setdefault(int(arrays.face_joint[f]), []).append(arrays.vertices[[a, b]])
+                out.setdefault(int(arrays.face_joint[f]), []).append(arrays.vertex_position[[a, b]])
     return {k: np.array(v) for k, v in out.items()}
 
 
@@ -73,7 +73,7 @@ def fig_model_setup(model: Model, title: str = "") -> Figure:
         coll.set_facecolor([colors[m] for m in arrays.block_material])
         coll.set_hatch(None)
         for b in np.flatnonzero(arrays.block_fixed):  # hatch the fixed blocks over their material colour
-            ax.fill(*arrays.vertices[arrays.block_ptr[b]:arrays.block_ptr[b + 1]].T, facecolor="none",
+            ax.fill(*arrays.vertex_position[arrays.block_ptr[b]:arrays.block_ptr[b + 1]].T, facecolor="none",
                     edgecolor="0.3", hatch="//", lw=0)
         for row, segments in joints.items():
             for seg in segments:
@@ -91,19 +91,21 @@ def fig_model_setup(model: Model, title: str = "") -> Figure:
 def _fig_solid_setup(model: Model, arrays: ModelArrays, colors: list, joints: dict[int, np.ndarray],
                      joint_colors: dict[int, str], joint_names: list[str], title: str) -> Figure:
     """The 3D model: pyvista's picture in a matplotlib figure (title, legend), or matplotlib's 3D axes."""
-    pts, links = arrays.points, arrays.links
+    attached, links = arrays.attached, arrays.links
+    pts = attached.point_position
     block_colors = [colors[m] for m in arrays.block_material]
-    symbols = [(pts[arrays.fixed_rows], "black", 12.0, "fixed point", "^"),
+    symbols = [(pts[attached.fixed_rows], "black", 12.0, "fixed point", "^"),
                (pts[links.hinge_rows_a], "dimgray", 14.0, "hinge (ball joint)", "o"),
-               (pts[arrays.load_rows], "tab:orange", 12.0, "point load", "v"),
-               (pts[arrays.measured_rows], "tab:red", 10.0, "measured point", "o")]
+               (pts[attached.load_rows], "tab:orange", 12.0, "point load", "v"),
+               (pts[attached.measured_rows], "tab:red", 10.0, "measured point", "o")]
     bolt_ends = np.zeros((0, 2, 3))
     if links.n_bolts:
         rb = links.bolt_rows_b
         bolt_ends = np.stack([pts[links.bolt_rows_a], np.where((rb >= 0)[:, None], pts[np.maximum(rb, 0)],
                                                                links.bolt_ground)], axis=1)
-    springs = np.stack([pts[np.concatenate([arrays.spring_rows_a, links.spring_rows_a]).astype(np.int64)],
-                        pts[np.concatenate([arrays.spring_rows_b, links.spring_rows_b]).astype(np.int64)]], axis=1)
+    ends_a = np.concatenate([attached.point_spring_rows_a, links.spring_rows_a]).astype(np.int64)
+    ends_b = np.concatenate([attached.point_spring_rows_b, links.spring_rows_b]).astype(np.int64)
+    springs = np.stack([pts[ends_a], pts[ends_b]], axis=1)
     lines = [(bolt_ends, "tab:red", 4.0, "bolt"), (springs, "tab:green", 3.0, "spring"),
              *((segs, joint_colors[r], 4.0, f"joint: {joint_names[r]}") for r, segs in joints.items())]
     handles = [h for h in _legend(model, arrays, colors) if h.get_label() != "fixed block"]
@@ -116,7 +118,7 @@ def _fig_solid_setup(model: Model, arrays: ModelArrays, colors: list, joints: di
         # points often lie inside or on blocks (a centroid, a hinge between two faces): moving blocks are then
         # drawn slightly see-through so that they show
         solid = MOVING_ALPHA if any(len(p) for p, *_ in symbols) else 1.0
-        image = render_blocks(arrays.vertices, arrays.mesh, colors=block_colors,
+        image = render_blocks(arrays.vertex_position, arrays.mesh, colors=block_colors,
                               opacity=np.where(arrays.block_fixed, FIXED_ALPHA, solid),
                               points=[(p, c, s) for p, c, s, _, _ in symbols],
                               segments=[(s, c, w) for s, c, w, _ in lines])
@@ -125,7 +127,7 @@ def _fig_solid_setup(model: Model, arrays: ModelArrays, colors: list, joints: di
         ax.set_axis_off()
     else:
         ax = fig.add_subplot(projection="3d")
-        coll = plotting.plot_solid_blocks(ax, arrays.vertices, arrays.mesh)
+        coll = plotting.plot_solid_blocks(ax, arrays.vertex_position, arrays.mesh)
         alpha = np.where(arrays.block_fixed, FIXED_ALPHA, 1.0)
         coll.set_facecolor([(*block_colors[b][:3], alpha[b]) for b in arrays.mesh.face_block])
         for p, c, _, _, m in symbols:
@@ -134,7 +136,7 @@ def _fig_solid_setup(model: Model, arrays: ModelArrays, colors: list, joints: di
         for segs, c, _, _ in lines:
             for seg in segs:
                 ax.plot(*seg.T, color=c, lw=2.0)
-        plotting.solid_limits(ax, arrays.vertices)
+        plotting.solid_limits(ax, arrays.vertex_position)
     ax.set_title(title)
     fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncols=3)
     return fig

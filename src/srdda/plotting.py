@@ -238,11 +238,11 @@ def fig_configuration(arrays: Any, title: str = "", labels: Sequence[str] | None
     points gets a second panel: a tenth of its length around the leftmost of
     them, enlarged, where they can be told apart.
     """
-    lo, hi = arrays.vertices.min(axis=0), arrays.vertices.max(axis=0)
+    lo, hi = arrays.vertex_position.min(axis=0), arrays.vertex_position.max(axis=0)
     width, height = hi - lo
     links = arrays.links
-    details = np.concatenate([arrays.points[rows] for rows in (
-        links.prescribed_rows, arrays.spring_rows_a, links.spring_rows_a, links.hinge_rows_a)])
+    details = np.concatenate([arrays.attached.point_position[rows] for rows in (
+        links.prescribed_rows, arrays.attached.point_spring_rows_a, links.spring_rows_a, links.hinge_rows_a)])
     # a slender model with springs, hinges or driven points: those crowd at the full model's scale
     slender = width > 20 * max(height, 1e-12) and len(details) > 0
     fig, axes = plt.subplots(2 if slender else 1, 1, figsize=(7, 6.5 if slender else 4.5), layout="constrained",
@@ -269,17 +269,17 @@ def fig_configuration(arrays: Any, title: str = "", labels: Sequence[str] | None
 
 def _draw_configuration(ax: plt.Axes, arrays: Any, labels: Sequence[str] | None) -> None:
     """Blocks, supports, springs, hinges, driven, loaded and measured points of ``arrays`` on ``ax``."""
-    coll = plot_blocks(ax, arrays.vertices, arrays.block_ptr)
+    coll = plot_blocks(ax, arrays.vertex_position, arrays.block_ptr)
     coll.set_facecolor(list(np.where(arrays.block_fixed, "0.8", "#c8d6e5")))
     if np.any(arrays.block_fixed):  # legend entries for the two fills
         ax.fill([], [], facecolor="0.8", edgecolor="k", lw=0.5, label="fixed block")
         ax.fill([], [], facecolor="#c8d6e5", edgecolor="k", lw=0.5, label="moving block")
-    pts = arrays.points
+    pts = arrays.attached.point_position
     links = arrays.links
-    if len(arrays.fixed_rows):
-        ax.plot(*pts[arrays.fixed_rows].T, "k^", ms=8, label="fixed point")
-    ends_a = np.concatenate([arrays.spring_rows_a, links.spring_rows_a]).astype(np.int64)
-    ends_b = np.concatenate([arrays.spring_rows_b, links.spring_rows_b]).astype(np.int64)
+    if len(arrays.attached.fixed_rows):
+        ax.plot(*pts[arrays.attached.fixed_rows].T, "k^", ms=8, label="fixed point")
+    ends_a = np.concatenate([arrays.attached.point_spring_rows_a, links.spring_rows_a]).astype(np.int64)
+    ends_b = np.concatenate([arrays.attached.point_spring_rows_b, links.spring_rows_b]).astype(np.int64)
     if len(ends_a):
         segments = np.full((3 * len(ends_a), 2), np.nan)  # a - b - gap, drawn as one line
         segments[0::3], segments[1::3] = pts[ends_a], pts[ends_b]
@@ -290,25 +290,25 @@ def _draw_configuration(ax: plt.Axes, arrays: Any, labels: Sequence[str] | None)
         ax.plot(*pts[links.hinge_rows_a].T, "o", mfc="white", mec="k", mew=1.5, ms=9, label="hinge / pin")
     if len(links.prescribed_rows):
         ax.plot(*pts[links.prescribed_rows].T, "D", color="tab:purple", ms=6, label="driven point")
-    if len(arrays.load_rows):
-        ax.plot(*pts[arrays.load_rows].T, "v", color="tab:orange", ms=7, label="point load")
+    if len(arrays.attached.load_rows):
+        ax.plot(*pts[arrays.attached.load_rows].T, "v", color="tab:orange", ms=7, label="point load")
     links = arrays.links
     if links.n_bolts:
         rb = links.bolt_rows_b
         ends = np.stack([pts[links.bolt_rows_a], np.where((rb >= 0)[:, None], pts[np.maximum(rb, 0)],
                                                           links.bolt_ground)], axis=1)
         plot_bolts(ax, ends, np.zeros(links.n_bolts, dtype=bool), label="bolt")
-    mr = arrays.measured_rows
+    mr = arrays.attached.measured_rows
     if len(mr):
         ax.plot(*pts[mr].T, "o", color="tab:red", ms=4, label="measured point")
         names = list(labels) if labels else [f"P{k}" for k in range(len(mr))]
         places: dict[tuple[float, ...], list[int]] = {}
-        scale = float(np.ptp(arrays.vertices, axis=0).max() or 1.0)
+        scale = float(np.ptp(arrays.vertex_position, axis=0).max() or 1.0)
         for k, p in enumerate(pts[mr]):
             places.setdefault(tuple(np.round(p / (1e-6 * scale)).tolist()), []).append(k)
         # each label points away from its block's centroid (a corner's outwards, a centroid's up-right),
         # so that the labels of points of one block part
-        away = pts[mr] - arrays.moments(arrays.vertices).centroid[arrays.point_block[mr]]
+        away = pts[mr] - arrays.moments(arrays.vertex_position).centroid[arrays.attached.point_block[mr]]
         for group in places.values():
             d = away[group[0]]
             d = d / np.hypot(*d) if np.hypot(*d) > 1e-9 * scale else np.array([0.6, 0.8])

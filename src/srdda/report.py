@@ -78,8 +78,8 @@ class ExampleRun:
 
 # -- figure makers -------------------------------------------------------------------
 def _pivot(model: Model) -> np.ndarray:
-    arrays = model.arrays()
-    return arrays.points[arrays.fixed_rows[0]] if len(arrays.fixed_rows) else np.zeros(2)
+    attached = model.arrays().attached
+    return attached.point_position[attached.fixed_rows[0]] if len(attached.fixed_rows) else np.zeros(2)
 
 
 def _fixed_blocks(model: Model) -> tuple[np.ndarray, np.ndarray] | None:
@@ -89,7 +89,7 @@ def _fixed_blocks(model: Model) -> tuple[np.ndarray, np.ndarray] | None:
     if len(keep) == 0:
         return None
     counts = np.diff(a.block_ptr)[keep]
-    verts = np.concatenate([a.vertices[a.block_ptr[b]:a.block_ptr[b + 1]] for b in keep])
+    verts = np.concatenate([a.vertex_position[a.block_ptr[b]:a.block_ptr[b + 1]] for b in keep])
     return verts, np.concatenate([[0], np.cumsum(counts)])
 
 

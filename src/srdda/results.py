@@ -65,8 +65,8 @@ def removed_blocks(step: int, stages: Sequence[Mapping[str, Any]], n_blocks: int
 
 def measured_points(arrays: ModelArrays, state: State) -> tuple[np.ndarray, np.ndarray]:
     """Positions and velocities (n, dim) of the measured points."""
-    mr = arrays.measured_rows
-    blocks = arrays.point_block[mr]
+    mr = arrays.attached.measured_rows
+    blocks = arrays.attached.point_block[mr]
     lever = state.points[mr] - state.moments.centroid[blocks]
     T = arrays.block_type.shape(lever)
     return state.points[mr].copy(), np.einsum("nij,nj->ni", T, state.velocity[blocks])

@@ -269,14 +269,15 @@ def _resolve_materials(model: Model, value: Mapping[str, Material], where: str) 
 
 
 def _materials(arrays: ModelArrays, value: dict[str, dict[str, Any]], mark: StageMark) -> ModelArrays:
-    density, elasticity = arrays.density.copy(), arrays.elasticity.copy()
+    density, elasticity = arrays.block_density.copy(), arrays.block_elasticity.copy()
     for index, fields in value.items():
         material = Material(**fields)
         blocks = arrays.block_material == int(index)
         density[blocks] = material.density
         elasticity[blocks] = elasticity_matrix_3d(material.young, material.poisson) if arrays.mesh is not None \
             else elasticity_matrix(material)
-    return replace(arrays, density=density, elasticity=elasticity, compliance=np.linalg.inv(elasticity))
+    return replace(arrays, block_density=density, block_elasticity=elasticity,
+                   block_compliance=np.linalg.inv(elasticity))
 
 
 def _resolve_joints(model: Model, value: Mapping[str, JointMaterial], where: str) -> dict[str, dict[str, Any]]:

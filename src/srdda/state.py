@@ -66,20 +66,21 @@ def mass_density(arrays: ModelArrays, moments: BlockMoments | PolyhedronMoments)
 def initial_state(arrays: ModelArrays, method: Method) -> State:
     """The state at t = 0; the acceleration solves M·A = F(0) block by block."""
     bt = arrays.block_type
-    mom = arrays.moments(arrays.vertices)
+    mom = arrays.moments(arrays.vertex_position)
     density = mass_density(arrays, mom)
     M = density[:, None, None] * bt.mass_matrix(mom.volume, mom.second)
     force = np.zeros((arrays.n_blocks, bt.ndof))
     force[:, bt.translation] = (density * mom.volume)[:, None] * arrays.gravity
-    force[:, bt.strain] = -mom.volume[:, None] * arrays.stress
+    force[:, bt.strain] = -mom.volume[:, None] * arrays.block_stress
     acc = np.zeros_like(force)
-    massive = arrays.density > 0
+    massive = arrays.block_density > 0
     if np.any(massive):
         acc[massive] = np.linalg.solve(M[massive], force[massive][..., None])[..., 0]
     if method.scheme.name == "shi":
         acc[:] = 0.0
     acc[arrays.block_fixed] = 0.0
-    velocity = arrays.velocity.copy()
+    velocity = arrays.block_velocity.copy()
     velocity[arrays.block_fixed] = 0.0
-    return State(0, 0.0, arrays.vertices.copy(), arrays.points.copy(), velocity, acc, arrays.stress.copy(),
-                 bt.initial_rotation(arrays.n_blocks), mom, np.zeros(arrays.links.n_multipliers))
+    return State(0, 0.0, arrays.vertex_position.copy(), arrays.attached.point_position.copy(), velocity, acc,
+                 arrays.block_stress.copy(), bt.initial_rotation(arrays.n_blocks), mom,
+                 np.zeros(arrays.links.n_multipliers))

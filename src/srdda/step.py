@@ -61,7 +61,7 @@ def contact_parameters(arrays: ModelArrays, settings: RunSettings, w0: float) ->
     """Contact stiffnesses and distances of a run (docs/contacts.md)."""
     kn = settings.contact_penalty if settings.contact_penalty is not None else settings.penalty
     if settings.auto_penalty is not None:
-        young = 1.0 / arrays.compliance[:, 0, 0]  # E in plane stress, E/(1-ν²) in plane strain
+        young = 1.0 / arrays.block_compliance[:, 0, 0]  # E in plane stress, E/(1-ν²) in plane strain
         kn = settings.auto_penalty * float(np.max(young)) * 1.0  # × unit thickness
     d0 = settings.contact_distance_factor * settings.max_displacement_ratio * w0
     return ContactParameters(kn, settings.shear_ratio * kn, d0, np.radians(settings.contact_angle_tolerance),
@@ -76,7 +76,7 @@ def shi_step_bound(arrays: ModelArrays, settings: RunSettings) -> float | None:
     g = float(np.linalg.norm(arrays.gravity))
     if g == 0.0:
         return None
-    return float(np.sqrt(2.0 * settings.max_displacement_ratio * model_half_height(arrays.vertices) / g))
+    return float(np.sqrt(2.0 * settings.max_displacement_ratio * model_half_height(arrays.vertex_position) / g))
 
 
 def time_step_advice(arrays: ModelArrays, settings: RunSettings) -> str | None:
@@ -88,7 +88,7 @@ def time_step_advice(arrays: ModelArrays, settings: RunSettings) -> str | None:
     bound = shi_step_bound(arrays, settings)
     if not settings.contacts or arrays.n_blocks < 2 or bound is None:
         return None
-    reach = settings.max_displacement_ratio * model_half_height(arrays.vertices)
+    reach = settings.max_displacement_ratio * model_half_height(arrays.vertex_position)
     if settings.dt <= 10.0 * bound:
         return None
     return (f"dt = {settings.dt:.3g} s is far too large for this contact model: a block falling from rest moves "
@@ -111,7 +111,7 @@ def default_terms(arrays: ModelArrays, settings: RunSettings, contact_law: Conta
     if method.gyroscopic and bt.rotation.stop - bt.rotation.start > 1:  # rotations about several axes
         terms.append(GyroscopicTerm(settings.secant_tolerance))
     if settings.contacts and arrays.n_blocks > 1:
-        w0 = model_half_height(arrays.vertices)
+        w0 = model_half_height(arrays.vertex_position)
         newton = settings.contact_solver == "newton"
         if not np.all(np.isnan(arrays.joints.restitution)) and (newton or not method.scheme.is_shi):
             # the impact law is linearised inside the open-close iteration, and calibrated to Shi's step
@@ -246,10 +246,10 @@ class Stepper:
         owner = arrays.vertex_block
         vertices = state.vertices + bt.point_displacement(state.vertices - centroid[owner], dd[owner],
                                                           method.kinematics)
-        pb = arrays.point_block
+        pb = arrays.attached.point_block
         points = state.points + bt.point_displacement(state.points - centroid[pb], dd[pb], method.kinematics)
         s = bt.strain
-        stress = state.stress + np.einsum("nij,nj->ni", arrays.elasticity, dd[:, s])
+        stress = state.stress + np.einsum("nij,nj->ni", arrays.block_elasticity, dd[:, s])
         if method.objective_stress:
             stress = bt.rotate_symmetric(stress, dd, 1.0)
             new_v[:, s] = bt.rotate_symmetric(new_v[:, s], dd, 2.0)

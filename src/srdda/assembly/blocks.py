@@ -70,14 +70,14 @@ class ElasticityTerm(Term):
         s = ctx.block_type.strain
         volume = ctx.state.moments.volume
         c = ctx.coeffs
-        system.diag[:, s, s] += c.c_k * volume[:, None, None] * ctx.arrays.elasticity
+        system.diag[:, s, s] += c.c_k * volume[:, None, None] * ctx.arrays.block_elasticity
         if c.k_v or c.k_a:
             rate = c.k_v * ctx.state.velocity[:, s] + c.k_a * ctx.state.acceleration[:, s]
-            system.rhs[:, s] += volume[:, None] * np.einsum("nij,nj->ni", ctx.arrays.elasticity, rate)
+            system.rhs[:, s] += volume[:, None] * np.einsum("nij,nj->ni", ctx.arrays.block_elasticity, rate)
 
     def energy(self, arrays: ModelArrays, state: State) -> float:
-        ds = state.stress - arrays.stress
-        return 0.5 * float(np.sum(state.moments.volume * np.einsum("ni,nij,nj->n", ds, arrays.compliance, ds)))
+        ds = state.stress - arrays.block_stress
+        return 0.5 * float(np.sum(state.moments.volume * np.einsum("ni,nij,nj->n", ds, arrays.block_compliance, ds)))
 
 
 class InitialStressTerm(Term):

@@ -76,7 +76,7 @@ def held_tresca_step(arrays: ModelArrays, run: RunSettings, normal_star: Callabl
     contact = next((t for t in terms if isinstance(t, NewtonContactTerm)), None)
     if contact is None:
         return None
-    contact.model = _HeldTresca(arrays, contact_parameters(arrays, run, model_half_height(arrays.vertices)),
+    contact.model = _HeldTresca(arrays, contact_parameters(arrays, run, model_half_height(arrays.vertex_position)),
                                 normal_star)
     stepper = Stepper(arrays, run, get_solver(solver), terms)
     state = initial_state(arrays, stepper.method) if state is None else state

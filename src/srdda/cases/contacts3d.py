@@ -108,7 +108,7 @@ def drop_case(rotation: tuple[float, float, float], method: str, steps: int = 60
     balance = energy[:, names.index("balance")]
     arrays = model.arrays()
     mass = float(arrays.block_mass[1])
-    centroid = arrays.moments(arrays.vertices).centroid[1]
+    centroid = arrays.moments(arrays.vertex_position).centroid[1]
     kinetic0 = float(energy[0, names.index("kinetic")])
     scale = kinetic0 + mass * G * float(centroid[2])
     return float(np.max(balance - balance[0]) / scale), float(energy[-1, names.index("dissipated_friction")] / scale)

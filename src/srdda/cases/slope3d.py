@@ -263,7 +263,7 @@ def wedge_model(phi: float, height: float = 6.0, depth: float = 2.0, plane_a: tu
     model.add_polyhedron(*slab_a, "rock", name="plane A", fixed=True)
     model.add_polyhedron(*slab_b, "rock", name="plane B", fixed=True)
     arrays = model.arrays()
-    model.add_measured_point(arrays.moments(arrays.vertices).centroid[0], block=0)
+    model.add_measured_point(arrays.moments(arrays.vertex_position).centroid[0], block=0)
     return model
 
 
@@ -280,7 +280,7 @@ def wedge_cut_model(peak_fs: float = 1.2, residual_fs: float = 0.8, height: floa
     model = wedge_model(wedge_friction_for(peak_fs), height=height)
     na, nb, nf = (plane_normal(*p) for p in (*WEDGE_PLANES, WEDGE_FACE))
     arrays = model.arrays()
-    slabs = arrays.vertices[arrays.block_ptr[1]:]  # the two joint-plane blocks: the toe spans their extent
+    slabs = arrays.vertex_position[arrays.block_ptr[1]:]  # the two joint-plane blocks: the toe spans their extent
     lo, hi = slabs.min(axis=0), slabs.max(axis=0)
     hi[2] = toe
     vertices, faces = halfspace_polyhedron([-na, -nb, -nf], [0.0, 0.0, 0.0], lo.tolist(), hi.tolist(), "toe")

@@ -35,9 +35,10 @@ class Measured:
 def _inertia(model: Model) -> tuple[np.ndarray, np.ndarray, float]:
     """Rotational inertia J about the centroid (3, 3), the centroid and the mass of a one-block model."""
     arrays = model.arrays()
-    mom = arrays.moments(arrays.vertices)
+    mom = arrays.moments(arrays.vertex_position)
     second = mom.second[0]
-    return arrays.density[0] * (np.trace(second) * np.eye(3) - second), mom.centroid[0], float(arrays.block_mass[0])
+    inertia = arrays.block_density[0] * (np.trace(second) * np.eye(3) - second)
+    return inertia, mom.centroid[0], float(arrays.block_mass[0])
 
 
 def spin_case(method: str, steps: int = 10_000, dt: float = 1e-3, omega: float = 3.0) -> list[Measured]:
@@ -51,7 +52,7 @@ def spin_case(method: str, steps: int = 10_000, dt: float = 1e-3, omega: float =
     model.add_polyhedron(*box((0, 0, 0), (1.0, 0.5, 0.2)), "rock", angular_velocity=(0.0, 0.0, omega))
     result = run(model, RunSettings(dt=dt, n_steps=steps, method=method), keep_history=False)
     state = result.final_state
-    volume0 = model.arrays().moments(model.arrays().vertices).volume[0]
+    volume0 = model.arrays().moments(model.arrays().vertex_position).volume[0]
     growth = (1.0 + (omega * dt) ** 2) ** steps if method == "dda0" else 1.0
     return [Measured("omega_z", method, float(state.velocity[0, 5]), omega),
             Measured("volume / initial", method, float(state.moments.volume[0] / volume0), growth)]

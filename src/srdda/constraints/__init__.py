@@ -32,9 +32,9 @@ def point_terms(arrays: ModelArrays, penalty: float) -> list[Term]:
     the water in its tension cracks."""
     links = arrays.links
     terms: list[Term] = []
-    if len(arrays.fixed_rows) or len(arrays.spring_rows_a) or len(links.spring_rows_a):
+    if len(arrays.attached.fixed_rows) or len(arrays.attached.point_spring_rows_a) or len(links.spring_rows_a):
         terms.append(SpringTerm(penalty))
-    if len(arrays.load_rows):
+    if len(arrays.attached.load_rows):
         terms.append(PointLoadTerm())
     if links.n_hinges or links.prescribed_multiplier.any():
         terms.append(LagrangeTerm(links))

@@ -119,7 +119,7 @@ class BoltTerm(Term):
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         links = self.links
         bolts = bolt_forces(links, ctx.state)
-        point_block = ctx.arrays.point_block
+        point_block = ctx.arrays.attached.point_block
         rb = links.bolt_rows_b
         ba = point_block[links.bolt_rows_a]
         bb = np.where(rb >= 0, point_block[np.maximum(rb, 0)], -1)

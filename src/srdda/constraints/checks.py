@@ -33,10 +33,10 @@ DEPENDENT = 1e-8
 
 
 def _shape_rows(arrays: ModelArrays, rows: np.ndarray) -> np.ndarray:
-    """Shi's T (n, dim, ndof) at the points ``rows`` of ``arrays.points``, at the start of the run."""
-    centroid = arrays.moments(arrays.vertices).centroid
-    blocks = arrays.point_block[rows]
-    return arrays.block_type.shape(arrays.points[rows] - centroid[blocks])
+    """Shi's T (n, dim, ndof) at the attached points ``rows``, at the start of the run."""
+    centroid = arrays.moments(arrays.vertex_position).centroid
+    blocks = arrays.attached.point_block[rows]
+    return arrays.block_type.shape(arrays.attached.point_position[rows] - centroid[blocks])
 
 
 def _multiplier_constraints(arrays: ModelArrays) -> list[tuple[str, dict[int, np.ndarray]]]:
@@ -57,8 +57,8 @@ def _multiplier_constraints(arrays: ModelArrays) -> list[tuple[str, dict[int, np
         rows = links.prescribed_rows[driven]
         t = _shape_rows(arrays, rows)
         for k, i in enumerate(driven):
-            point = tuple(float(c) for c in arrays.points[rows[k]])
-            block = int(arrays.point_block[rows[k]])
+            point = tuple(float(c) for c in arrays.attached.point_position[rows[k]])
+            block = int(arrays.attached.point_block[rows[k]])
             out.append((f"the point driven at {point}", {block: t[k][links.prescribed_mask[i]]}))
     return out
 
@@ -106,36 +106,36 @@ def redundant_constraints(arrays: ModelArrays) -> list[str]:
 
 def unheld_massless_blocks(arrays: ModelArrays) -> list[int]:
     """Moving blocks of density 0 whose translation and rotation nothing resists at the start (see the module)."""
-    massless = np.flatnonzero((arrays.density == 0) & ~arrays.block_fixed)
+    massless = np.flatnonzero((arrays.block_density == 0) & ~arrays.block_fixed)
     if not len(massless):
         return []
-    bt, links = arrays.block_type, arrays.links
+    bt, links, attached = arrays.block_type, arrays.links, arrays.attached
     rigid = np.r_[bt.translation, bt.rotation]
     # every point that holds its block: fixed points, spring ends, hinge and pin points, driven points, bolt ends
-    full = [arrays.fixed_rows, arrays.spring_rows_a, arrays.spring_rows_b, links.hinge_rows_a,
+    full = [attached.fixed_rows, attached.point_spring_rows_a, attached.point_spring_rows_b, links.hinge_rows_a,
             links.hinge_rows_b[links.hinge_block_b >= 0], links.bolt_rows_a[links.bolt_shear_stiffness > 0],
             links.bolt_rows_b[(links.bolt_rows_b >= 0) & (links.bolt_shear_stiffness > 0)],
             links.spring_rows_a[~links.spring_axial], links.spring_rows_b[~links.spring_axial]]
     rows = np.concatenate([r.astype(np.int64) for r in full])
     t = _shape_rows(arrays, rows)[:, :, rigid].reshape(-1, len(rigid))
-    owner = np.repeat(arrays.point_block[rows], bt.dim)
+    owner = np.repeat(attached.point_block[rows], bt.dim)
     # axial springs and bolts hold along their line only, at both ends (a bolt's ground end holds nothing)
     axial_a = np.r_[links.spring_rows_a[links.spring_axial], links.bolt_rows_a]
     axial_b = np.r_[links.spring_rows_b[links.spring_axial], links.bolt_rows_b]
     if len(axial_a):
         ground = np.r_[np.zeros((int(links.spring_axial.sum()), bt.dim)), links.bolt_ground]
-        line = arrays.points[axial_a] - np.where((axial_b >= 0)[:, None], arrays.points[np.maximum(axial_b, 0)],
-                                                 ground)
+        line = attached.point_position[axial_a] - np.where((axial_b >= 0)[:, None],
+                                                           attached.point_position[np.maximum(axial_b, 0)], ground)
         line /= np.maximum(np.linalg.norm(line, axis=1), 1e-300)[:, None]
         on_block = axial_b >= 0
         for ends, direction in ((axial_a, line), (axial_b[on_block], line[on_block])):
             t = np.concatenate([t, np.einsum("nd,ndk->nk", direction, _shape_rows(arrays, ends)[:, :, rigid])])
-            owner = np.concatenate([owner, arrays.point_block[ends]])
+            owner = np.concatenate([owner, attached.point_block[ends]])
     driven = links.prescribed_rows
     if len(driven):
         td = _shape_rows(arrays, driven)[:, :, rigid]
         t = np.concatenate([t, td[links.prescribed_mask]])
-        owner = np.concatenate([owner, np.repeat(arrays.point_block[driven], links.prescribed_mask.sum(axis=1))])
+        owner = np.concatenate([owner, np.repeat(attached.point_block[driven], links.prescribed_mask.sum(axis=1))])
     out = []
     for b in massless:
         held = t[owner == b]

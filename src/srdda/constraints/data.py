@@ -1,8 +1,8 @@
 """Specifications of hinges, pins, springs and prescribed motion, and their flat arrays.
 
 The :class:`~srdda.model.Model` keeps lists of the specs below; ``Model.arrays``
-puts every attached point into the model's point table (so the time loop
-moves them with their blocks) and compiles :class:`ConstraintArrays`, which
+puts every point into the model's attached points (``ModelArrays.attached``,
+which the time loop moves with their blocks) and compiles :class:`ConstraintArrays`, which
 indexes those rows. Units SI.
 """
 from __future__ import annotations
@@ -101,7 +101,11 @@ def _rows() -> np.ndarray:
 
 @dataclass(frozen=True)
 class ConstraintArrays:
-    """Flat arrays of the hinges, springs and prescribed points (rows index ``ModelArrays.points``).
+    """Flat arrays of the hinges, springs with dashpots, driven points and bolts.
+
+    Their ``*_rows*`` index the model's attached points (``ModelArrays.attached``); the
+    zero-length point springs are not links but attached points' rows
+    (``AttachedPoints.point_spring_rows_a``).
 
     ``dim`` is the number of coordinates of a point: every per-point array has
     ``dim`` columns and a hinge or pin has ``dim`` multiplier rows.

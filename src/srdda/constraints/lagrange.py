@@ -57,20 +57,21 @@ class LagrangeTerm(Term):
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         links, arrays, points = self.links, ctx.arrays, ctx.state.points
-        point_block = arrays.point_block
+        point_block = arrays.attached.point_block
         if links.n_hinges:
             ra, rb = links.hinge_rows_a, links.hinge_rows_b
             bb = links.hinge_block_b
             linked = bb >= 0
             ta = ctx.shape_at(point_block[ra], points[ra])
             tb = ctx.shape_at(point_block[rb], points[rb])
-            other = np.where(linked[:, None], points[rb], arrays.points[ra])  # pins: the point's start position
+            start = arrays.attached.point_position[ra]
+            other = np.where(linked[:, None], points[rb], start)  # pins: the point's start position
             rhs = np.where(links.hinge_correct[:, None], other - points[ra], 0.0)
             system.add_point_constraints(point_block[ra], ta, bb, tb, rhs)
         if len(self.driven):
             rows = links.prescribed_rows[self.driven]
             blocks = point_block[rows]
-            target = prescribed_target(links, arrays.points, ctx.state.time + ctx.dt)[self.driven]
+            target = prescribed_target(links, arrays.attached.point_position, ctx.state.time + ctx.dt)[self.driven]
             t = ctx.shape_at(blocks, points[rows])
             system.add_point_constraints(blocks, t, np.full(len(rows), -1), None, target - points[rows],
                                          links.prescribed_mask[self.driven])

@@ -24,7 +24,7 @@ __all__ = ["PointLoadTerm", "point_load_forces"]
 
 def point_load_forces(arrays: ModelArrays, t: float) -> np.ndarray:
     """Forces (n_loads, dim) of every point load at time t."""
-    return np.array([load(t) for load in arrays.loads]).reshape(len(arrays.loads), -1)
+    return np.array([load(t) for load in arrays.attached.load_force]).reshape(len(arrays.attached.load_force), -1)
 
 
 class PointLoadTerm(Term):
@@ -35,13 +35,13 @@ class PointLoadTerm(Term):
         return True
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
-        lr = ctx.arrays.load_rows
-        blocks = ctx.arrays.point_block[lr]
+        lr = ctx.arrays.attached.load_rows
+        blocks = ctx.arrays.attached.point_block[lr]
         T = ctx.shape_at(blocks, ctx.state.points[lr])
         scatter_add(system.rhs, blocks, np.einsum("nki,nk->ni", T, point_load_forces(ctx.arrays, ctx.t_load)))
 
     def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
-        lr = ctx.arrays.load_rows
+        lr = ctx.arrays.attached.load_rows
         out = np.zeros(len(LEDGER))
         dx = new.points[lr] - ctx.state.points[lr]
         out[LEDGER.index("work_loads")] = float(np.sum(point_load_forces(ctx.arrays, ctx.t_load) * dx))

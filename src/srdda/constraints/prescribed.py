@@ -62,23 +62,23 @@ class PrescribedPenaltyTerm(Term):
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         rows = self.links.prescribed_rows[self.pen]
-        blocks = ctx.arrays.point_block[rows]
+        blocks = ctx.arrays.attached.point_block[rows]
         mask = self.links.prescribed_mask[self.pen].astype(float)
         t = ctx.shape_at(blocks, ctx.state.points[rows]) * mask[:, :, None]
-        gap = self._gap(ctx.arrays.points, ctx.state.points, ctx.t_load)
+        gap = self._gap(ctx.arrays.attached.point_position, ctx.state.points, ctx.t_load)
         add_penalty_pairs(system, PenaltyPairs(blocks, t, np.full(len(rows), -1), None, gap, self.stiffness),
                           ctx.coeffs.c_p)
 
     def energy(self, arrays: ModelArrays, state: State) -> float:
         """½p|gap|² in the prescribed components."""
-        gap = self._gap(arrays.points, state.points, state.time)
+        gap = self._gap(arrays.attached.point_position, state.points, state.time)
         return 0.5 * float(np.sum(self.stiffness * np.sum(gap**2, axis=1)))
 
     def work(self, ctx: StepContext, new: State, dd: np.ndarray, multipliers: np.ndarray) -> np.ndarray | None:
         """Work of the moving anchors on their springs: -p·g_mid·Δx_target, g_mid the mean gap."""
         links, pen = self.links, self.pen
-        a0 = prescribed_target(links, ctx.arrays.points, ctx.state.time)[pen]
-        a1 = prescribed_target(links, ctx.arrays.points, new.time)[pen]
+        a0 = prescribed_target(links, ctx.arrays.attached.point_position, ctx.state.time)[pen]
+        a1 = prescribed_target(links, ctx.arrays.attached.point_position, new.time)[pen]
         rows = links.prescribed_rows[pen]
         g_mid = 0.5 * ((ctx.state.points[rows] - a0) + (new.points[rows] - a1)) * links.prescribed_mask[pen]
         out = np.zeros(len(LEDGER))

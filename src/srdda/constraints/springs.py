@@ -49,19 +49,20 @@ def spring_geometry(links: ConstraintArrays, points: np.ndarray) -> tuple[np.nda
 
 def fixed_point_stiffness(arrays: ModelArrays, penalty: float) -> np.ndarray:
     """Stiffness (nf,) of every fixed point: its own, else the run's penalty."""
-    return np.where(np.isnan(arrays.fixed_stiffness), penalty, arrays.fixed_stiffness)
+    return np.where(np.isnan(arrays.attached.fixed_stiffness), penalty, arrays.attached.fixed_stiffness)
 
 
 def spring_energy(arrays: ModelArrays, points: np.ndarray, penalty: float) -> float:
     """Strain energy of the fixed points, point springs and springs at ``points``."""
     energy = 0.0
-    fr = arrays.fixed_rows
+    attached = arrays.attached
+    fr = attached.fixed_rows
     if len(fr):
         k = fixed_point_stiffness(arrays, penalty)
-        energy += 0.5 * float(np.sum(k * np.sum((points[fr] - arrays.points[fr]) ** 2, axis=1)))
-    if len(arrays.spring_rows_a):
-        gap = points[arrays.spring_rows_a] - points[arrays.spring_rows_b]
-        energy += 0.5 * float(np.sum(arrays.spring_stiffness * np.sum(gap**2, axis=1)))
+        energy += 0.5 * float(np.sum(k * np.sum((points[fr] - attached.point_position[fr]) ** 2, axis=1)))
+    if len(attached.point_spring_rows_a):
+        gap = points[attached.point_spring_rows_a] - points[attached.point_spring_rows_b]
+        energy += 0.5 * float(np.sum(attached.point_spring_stiffness * np.sum(gap**2, axis=1)))
     links = arrays.links
     if len(links.spring_rows_a):
         d, length, _ = spring_geometry(links, points)
@@ -84,18 +85,18 @@ class SpringTerm(Term):
         return True
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
-        arrays, points, c_p = ctx.arrays, ctx.state.points, ctx.coeffs.c_p
-        pb = arrays.point_block
-        fr = arrays.fixed_rows
+        arrays, attached, points, c_p = ctx.arrays, ctx.arrays.attached, ctx.state.points, ctx.coeffs.c_p
+        pb = attached.point_block
+        fr = attached.fixed_rows
         if len(fr):
-            gap = points[fr] - arrays.points[fr]  # pull back to the original position
+            gap = points[fr] - attached.point_position[fr]  # pull back to the original position
             add_penalty_pairs(system, PenaltyPairs(pb[fr], ctx.shape_at(pb[fr], points[fr]), np.full(len(fr), -1),
                                                    None, gap, fixed_point_stiffness(arrays, self.penalty)), c_p)
-        ra, rb = arrays.spring_rows_a, arrays.spring_rows_b
+        ra, rb = attached.point_spring_rows_a, attached.point_spring_rows_b
         if len(ra):
             add_penalty_pairs(system, PenaltyPairs(pb[ra], ctx.shape_at(pb[ra], points[ra]), pb[rb],
                                                    ctx.shape_at(pb[rb], points[rb]), points[ra] - points[rb],
-                                                   arrays.spring_stiffness), c_p)
+                                                   attached.point_spring_stiffness), c_p)
         if len(arrays.links.spring_rows_a):
             self._add_springs(system, ctx)
 
@@ -104,7 +105,7 @@ class SpringTerm(Term):
         links = ctx.arrays.links
         ra, rb = links.spring_rows_a, links.spring_rows_b
         points = ctx.state.points
-        ba, bb = ctx.arrays.point_block[ra], ctx.arrays.point_block[rb]
+        ba, bb = ctx.arrays.attached.point_block[ra], ctx.arrays.attached.point_block[rb]
         ta, tb = ctx.shape_at(ba, points[ra]), ctx.shape_at(bb, points[rb])
         d, length, unit = spring_geometry(links, points)
         k, c = links.spring_stiffness, links.spring_damping
@@ -138,11 +139,11 @@ class SpringTerm(Term):
         c_p = 1 (the schemes of the paper), or what a point update that differs
         from T·Δd (dda1's post-adjusted rotations) put into them (negative).
         """
-        arrays, links = ctx.arrays, ctx.arrays.links
-        if not (len(arrays.fixed_rows) or len(arrays.spring_rows_a) or len(links.spring_rows_a)):
+        arrays, attached, links = ctx.arrays, ctx.arrays.attached, ctx.arrays.links
+        if not (len(attached.fixed_rows) or len(attached.point_spring_rows_a) or len(links.spring_rows_a)):
             return None
         out = np.zeros(len(LEDGER))
-        points, pb, c_p = ctx.state.points, arrays.point_block, ctx.coeffs.c_p
+        points, pb, c_p = ctx.state.points, attached.point_block, ctx.coeffs.c_p
 
         def moved(rows: np.ndarray) -> np.ndarray:  # T·Δd of the points ``rows`` (n, dim)
             return np.einsum("nki,ni->nk", ctx.shape_at(pb[rows], points[rows]), dd[pb[rows]])
@@ -151,13 +152,13 @@ class SpringTerm(Term):
             return -float(np.sum(k[:, None] * (gap + c_p * dg) * dg))
 
         work = 0.0
-        fr = arrays.fixed_rows
+        fr = attached.fixed_rows
         if len(fr):
-            work += step_work(fixed_point_stiffness(arrays, self.penalty), points[fr] - arrays.points[fr],
+            work += step_work(fixed_point_stiffness(arrays, self.penalty), points[fr] - attached.point_position[fr],
                               moved(fr))
-        ra, rb = arrays.spring_rows_a, arrays.spring_rows_b
+        ra, rb = attached.point_spring_rows_a, attached.point_spring_rows_b
         if len(ra):
-            work += step_work(arrays.spring_stiffness, points[ra] - points[rb], moved(ra) - moved(rb))
+            work += step_work(attached.point_spring_stiffness, points[ra] - points[rb], moved(ra) - moved(rb))
         if len(links.spring_rows_a):
             d, length, unit = spring_geometry(links, points)
             rel = moved(links.spring_rows_a) - moved(links.spring_rows_b)

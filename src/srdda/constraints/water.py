@@ -272,8 +272,8 @@ def crack_facets(arrays: ModelArrays, crack: TensionCrack) -> tuple[np.ndarray, 
     """(simplices (n, m), blocks (n,)) of the moving blocks' boundary lying on ``crack``'s plane in the model as
     built; ValueError naming none found."""
     simplices, _, block = boundary_simplices(arrays)
-    tolerance = ON_PLANE * float(np.max(np.ptp(arrays.vertices, axis=0)))
-    distance = np.abs((arrays.vertices - np.asarray(crack.point)) @ np.asarray(crack.normal))
+    tolerance = ON_PLANE * float(np.max(np.ptp(arrays.vertex_position, axis=0)))
+    distance = np.abs((arrays.vertex_position - np.asarray(crack.point)) @ np.asarray(crack.normal))
     on = np.all(distance[simplices] <= tolerance, axis=1) & ~arrays.block_fixed[block]
     if not np.any(on):
         raise ValueError(f"no face of a moving block lies on the crack through {list(crack.point)} with normal "

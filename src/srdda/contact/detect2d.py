@@ -71,14 +71,14 @@ class Detector2D:
         boxes, pairs = self.pairs(vertices)
         if len(pairs) == 0:
             return None
-        found = narrow_phase_2d(vertices, arr.block_ptr, arr.vertex_block, arr.next_vertex, self.previous_vertex,
+        found = narrow_phase_2d(vertices, arr.block_ptr, arr.vertex_block, arr.vertex_next, self.previous_vertex,
                                 pairs, boxes, self.distance, self.sin_tol, self.max_penetration)
         if len(found) == 0:
             return None
         vertex, edge = found[:, FOUND_VERTEX], found[:, FOUND_EDGE]
         p = vertices[vertex]
         p0 = vertices[edge]
-        d = vertices[arr.next_vertex[edge]] - p0
+        d = vertices[arr.vertex_next[edge]] - p0
         length = np.hypot(d[:, 0], d[:, 1])
         tangent = d / length[:, None]
         normal = np.column_stack([tangent[:, 1], -tangent[:, 0]])
@@ -87,9 +87,9 @@ class Detector2D:
         ratio = np.clip(parameter, 0.0, 1.0)
         block_a, block_b = arr.vertex_block[vertex], arr.vertex_block[edge]
         named = arr.edge_joint[edge]
-        joint = np.where(named >= 0, named, arr.joint_by_materials[arr.block_material[block_a],
+        joint = np.where(named >= 0, named, arr.material_joint[arr.block_material[block_a],
                                                                    arr.block_material[block_b]])
-        bond, tributary, bond_faces = edge_shares(vertices, arr.next_vertex, self.previous_vertex, vertex, tangent,
+        bond, tributary, bond_faces = edge_shares(vertices, arr.vertex_next, self.previous_vertex, vertex, tangent,
                                                   self.cos_parallel)
         n = len(found)
         return ContactRecord(

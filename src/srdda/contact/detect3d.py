@@ -198,7 +198,7 @@ class Detector3D:
         self.topology = PolyhedronTopology.of(arrays.mesh)
         self.sin_tol = float(np.sin(angle_tolerance))
         self.cos_parallel = float(np.cos(angle_tolerance))
-        self.key_size = max(len(arrays.vertices), len(self.mesh.face_block), len(self.topology.edge_v0)) + 1
+        self.key_size = max(len(arrays.vertex_position), len(self.mesh.face_block), len(self.topology.edge_v0)) + 1
         self.pairs = PairFinder(arrays, distance, candidate_pairs_3d)
 
     def detect(self, vertices: np.ndarray) -> ContactRecord | None:
@@ -229,7 +229,7 @@ class Detector3D:
         take the joint chosen by the two blocks' materials (as 2D edges do).
         """
         arr = self.arrays
-        by_materials = arr.joint_by_materials[arr.block_material[record.block_a], arr.block_material[record.block_b]]
+        by_materials = arr.material_joint[arr.block_material[record.block_a], arr.block_material[record.block_b]]
         face_joint = arr.face_joint
         if face_joint is None or not np.any(face_joint >= 0):
             return by_materials

@@ -115,8 +115,8 @@ class SettleRule:
         self.rule = rule
         self.block_type = arrays.block_type
         self.movable = np.flatnonzero(~arrays.block_fixed)
-        centroid = arrays.moments(arrays.vertices).centroid
-        reach = np.linalg.norm(arrays.vertices - centroid[arrays.vertex_block], axis=1)
+        centroid = arrays.moments(arrays.vertex_position).centroid
+        reach = np.linalg.norm(arrays.vertex_position - centroid[arrays.vertex_block], axis=1)
         self.radius = np.maximum.reduceat(reach, arrays.block_ptr[:-1])[self.movable]  # farthest vertex (m)
         self.rest_since: float | None = None
         self.reason = "end_time"

@@ -24,8 +24,8 @@ def boundary_simplices(arrays: ModelArrays) -> tuple[np.ndarray, np.ndarray, np.
     """(vertex indices (n, m) of every boundary simplex, its face (n,), its block (n,)): m = 2 in 2D (a face is
     an edge, named by its start vertex), 3 in 3D (a face's fan triangle, the face a mesh face)."""
     if arrays.mesh is None:
-        starts = np.arange(len(arrays.vertices))
-        return np.stack([starts, arrays.next_vertex], axis=1), starts, arrays.vertex_block
+        starts = np.arange(len(arrays.vertex_position))
+        return np.stack([starts, arrays.vertex_next], axis=1), starts, arrays.vertex_block
     return arrays.mesh.tri, arrays.mesh.tri_face, arrays.mesh.tri_block
 
 

@@ -24,10 +24,11 @@ class Ground:
         fixed = arrays.block_fixed
         if arrays.mesh is None:  # 2D: the edges of fixed blocks
             keep = fixed[arrays.vertex_block]
-            self.facets = np.stack([arrays.vertices[keep], arrays.vertices[arrays.next_vertex[keep]]], axis=1)
+            vertices = arrays.vertex_position
+            self.facets = np.stack([vertices[keep], vertices[arrays.vertex_next[keep]]], axis=1)
         else:  # 3D: the fan triangles of the fixed blocks' faces
             tri = arrays.mesh.tri[fixed[arrays.mesh.tri_block]]
-            self.facets = arrays.vertices[tri]
+            self.facets = arrays.vertex_position[tri]
 
     def height_below(self, point: np.ndarray) -> float:
         """Height of the highest ground surface at or below ``point`` on its vertical; NaN if there is none."""

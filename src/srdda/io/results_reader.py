@@ -24,6 +24,7 @@ import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import h5py
 import numpy as np
@@ -33,7 +34,7 @@ from ..constraints.data import links_from_flat
 from ..geometry.polyhedron import PolyhedronMesh
 from ..integrators.methods import METHODS
 from ..ledger import ENERGY_NAMES
-from ..model import JointTable, Load, ModelArrays
+from ..model import AttachedPoints, JointTable, Load, ModelArrays
 from ..settings import RunSettings
 from ..stages import StagePlan
 from ..state import State
@@ -181,44 +182,67 @@ def model_arrays_from_file(path: str | Path) -> ModelArrays:
             raise _damaged(path, f"the stored model in /model ({_what(exc)})") from None
 
 
+# The arrays of the stored model (/model): dataset name -> the ModelArrays field it holds ("attached.": a field
+# of the attached points). The names are the file format's, as srdda 0.1.0 wrote them (the fields were renamed
+# since); the mesh, the joint table and the links are stored as "mesh.<field>", "joints.<field>", "links.<field>".
+MODEL_DATASETS: dict[str, str] = {
+    "vertices": "vertex_position", "block_ptr": "block_ptr", "density": "block_density",
+    "elasticity": "block_elasticity", "velocity": "block_velocity", "stress": "block_stress", "gravity": "gravity",
+    "points": "attached.point_position", "point_block": "attached.point_block", "fixed_rows": "attached.fixed_rows",
+    "fixed_stiffness": "attached.fixed_stiffness", "load_rows": "attached.load_rows",
+    "spring_rows_a": "attached.point_spring_rows_a", "spring_rows_b": "attached.point_spring_rows_b",
+    "spring_stiffness": "attached.point_spring_stiffness", "measured_rows": "attached.measured_rows",
+    "vertex_block": "vertex_block", "next_vertex": "vertex_next", "compliance": "block_compliance",
+    "block_fixed": "block_fixed", "block_material": "block_material", "edge_joint": "edge_joint",
+    "joint_by_materials": "material_joint", "face_joint": "face_joint", "block_removed": "block_removed",
+}
+
+
 def _model_arrays(g: h5py.Group, path: str | Path) -> ModelArrays:
     loads_json = read_json(g, "loads", list)
     if any(ld is None for ld in loads_json):
         raise ResultsFileError(f"{path}: the model has a point load given as a Python function, which a file "
                                "cannot hold; pass the model to resume(..., model=...)")
-    kwargs: dict[str, object] = {}
-    for f_ in dataclasses.fields(ModelArrays):
-        if f_.name == "block_names":
-            kwargs[f_.name] = tuple(str(n) for n in read_json(g, "block_names", list))
-        elif f_.name == "loads":
-            kwargs[f_.name] = tuple(Load.from_json(ld) for ld in loads_json)
-        elif f_.name == "links" and "links" in g.attrs:
-            meta = read_json(g, "links", dict)
-            if any(s is None for s in meta.get("sources", ())) or (meta.get("has_base_acceleration")
-                                                                   and meta.get("base_acceleration") is None):
-                raise ResultsFileError(f"{path}: a prescribed-motion or base-acceleration history is a Python "
-                                       "function, which a file cannot hold; pass the model to resume(..., model=...)")
-            kwargs["links"] = links_from_flat({k[6:]: g[k][()] for k in g if k.startswith("links.")}, meta)
-        elif f_.name == "mesh":
-            fields = {k[5:]: g[k][()] for k in g if k.startswith("mesh.")}
-            kwargs["mesh"] = PolyhedronMesh(**fields) if fields else None
-        elif f_.name == "joints" and "joints.friction_angle" in g:
-            columns = {k[7:]: g[k][()] for k in g if k.startswith("joints.")}
-            columns.setdefault("restitution", np.full(len(columns["friction_angle"]), np.nan))  # older files: none
-            kwargs["joints"] = JointTable(**columns)
-        elif f_.name == "joints" and "joint_properties" in g:  # files of srdda 0.1.0: (nj, 3) columns
-            table = g["joint_properties"][()]
-            nan = np.full(len(table), np.nan)
-            kwargs["joints"] = JointTable(table[:, 0], table[:, 1], table[:, 2], nan, nan.copy(), nan.copy())
-        elif f_.name == "stages":  # the resolved stages of a staged run (srdda.stages)
-            kwargs["stages"] = stage_plans(g)
-        elif f_.name in g:
-            kwargs[f_.name] = g[f_.name][()]
-        elif f_.default is None:  # an optional array (face_joint: 3D faces naming joint materials)
-            kwargs[f_.name] = None
+    optional = {f_.name for f_ in dataclasses.fields(ModelArrays) if f_.default is None}  # face_joint, ...
+
+    def lacks(name: str) -> ResultsFileError:
+        return ResultsFileError(f"{path}: the stored model lacks field {name!r} (written by another srdda "
+                                "version?); pass the model to resume(..., model=...)")
+
+    kwargs: dict[str, Any] = {}
+    attached: dict[str, Any] = {"load_force": tuple(Load.from_json(ld) for ld in loads_json)}
+    for name, field_ in MODEL_DATASETS.items():
+        record, _, field_ = field_.rpartition(".")
+        columns = attached if record else kwargs
+        if name in g:
+            columns[field_] = g[name][()]
+        elif field_ in optional:  # an optional array (face_joint: 3D faces naming joint materials)
+            columns[field_] = None
         else:
-            raise ResultsFileError(f"{path}: the stored model lacks field {f_.name!r} (written by another "
-                                   "srdda version?); pass the model to resume(..., model=...)")
+            raise lacks(name)
+    kwargs["attached"] = AttachedPoints(**attached)
+    kwargs["block_names"] = tuple(str(n) for n in read_json(g, "block_names", list))
+    if "links" not in g.attrs:
+        raise lacks("links")
+    meta = read_json(g, "links", dict)
+    if any(s is None for s in meta.get("sources", ())) or (meta.get("has_base_acceleration")
+                                                           and meta.get("base_acceleration") is None):
+        raise ResultsFileError(f"{path}: a prescribed-motion or base-acceleration history is a Python "
+                               "function, which a file cannot hold; pass the model to resume(..., model=...)")
+    kwargs["links"] = links_from_flat({k[6:]: g[k][()] for k in g if k.startswith("links.")}, meta)
+    mesh = {k[5:]: g[k][()] for k in g if k.startswith("mesh.")}
+    kwargs["mesh"] = PolyhedronMesh(**mesh) if mesh else None
+    if "joints.friction_angle" in g:
+        columns = {k[7:]: g[k][()] for k in g if k.startswith("joints.")}
+        columns.setdefault("restitution", np.full(len(columns["friction_angle"]), np.nan))  # older files: none
+        kwargs["joints"] = JointTable(**columns)
+    elif "joint_properties" in g:  # files of srdda 0.1.0: (nj, 3) columns
+        table = g["joint_properties"][()]
+        nan = np.full(len(table), np.nan)
+        kwargs["joints"] = JointTable(table[:, 0], table[:, 1], table[:, 2], nan, nan.copy(), nan.copy())
+    else:
+        raise lacks("joints")
+    kwargs["stages"] = stage_plans(g)  # the resolved stages of a staged run (srdda.stages)
     return ModelArrays(**kwargs)
 
 
@@ -517,8 +541,8 @@ def load_checkpoint(path: str | Path, arrays: ModelArrays) -> State:
 def checkpoint_state(group: h5py.Group, index: int, arrays: ModelArrays, path: str | Path) -> State:
     """The State of checkpoint ``index``, checked against the model (:class:`ResultsFileError` if it does not fit)."""
     def moments(vertices: np.ndarray):
-        if vertices.shape != arrays.vertices.shape:
-            raise DamagedError(f"it has {len(vertices)} vertices, the model {len(arrays.vertices)}")
+        if vertices.shape != arrays.vertex_position.shape:
+            raise DamagedError(f"it has {len(vertices)} vertices, the model {len(arrays.vertex_position)}")
         return arrays.moments(vertices)
 
     try:

@@ -61,6 +61,7 @@ import tempfile
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from operator import attrgetter
 from pathlib import Path
 from typing import IO
 
@@ -77,7 +78,7 @@ from ..state import State, initial_state
 from .checkpoint import append_checkpoint, checkpoint_count, commit_checkpoint, truncate_checkpoints
 from .integrity import LIBVER, DamagedError, checksummed, read_text, write_text
 from .outputlock import OutputInUseError, ResultsWriteError, release_lock, take_lock
-from .results_reader import (FORMAT, FORMAT_VERSION, Intact, ResultsDamageWarning, ResultsFileError,
+from .results_reader import (FORMAT, FORMAT_VERSION, MODEL_DATASETS, Intact, ResultsDamageWarning, ResultsFileError,
                              ResultsInUseError, StoredResult, checkpoint_state, inspect_results, load_checkpoint,
                              model_arrays_from_file, open_results, read_header, read_results, stage_table)
 
@@ -198,18 +199,18 @@ def _append(group: h5py.Group, name: str, rows: np.ndarray, chunk_rows: int) -> 
 
 
 def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None) -> None:
-    """Every array field of ``arrays`` as a dataset; names, loads, stages and the model text as attributes
-    (checksummed). A stage's arrays store the model as built (``arrays.base``)."""
+    """Every array of ``arrays`` as a dataset (named as :data:`MODEL_DATASETS` says); names, loads, stages and
+    the model text as attributes (checksummed). A stage's arrays store the model as built (``arrays.base``)."""
     arrays = arrays.base if arrays.base is not None else arrays
 
     def dataset(name: str, value: np.ndarray) -> None:
         value = np.asarray(value)
         group.create_dataset(name, data=value, **checksummed(value))
 
-    for f in dataclasses.fields(arrays):
-        value = getattr(arrays, f.name)
-        if isinstance(value, np.ndarray):
-            dataset(f.name, value)
+    for name, field_ in MODEL_DATASETS.items():
+        value = attrgetter(field_)(arrays)
+        if value is not None:  # an optional array (face_joint in 2D, block_removed without stages)
+            dataset(name, value)
     for part in ("mesh", "joints"):  # the faces of 3D blocks (None in 2D); the joint table
         record = getattr(arrays, part)
         if record is not None:
@@ -220,7 +221,7 @@ def _write_model(group: h5py.Group, arrays: ModelArrays, model_text: str | None)
         dataset(f"links.{name}", value)
     write_text(group, "links", json.dumps(links_meta))
     write_text(group, "block_names", json.dumps(list(arrays.block_names)))
-    write_text(group, "loads", json.dumps([ld.to_json() for ld in arrays.loads]))
+    write_text(group, "loads", json.dumps([ld.to_json() for ld in arrays.attached.load_force]))
     if model_text is not None:
         write_text(group, "model_text", model_text)
     if arrays.stages:

@@ -114,7 +114,7 @@ def extruded_incline_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
     for method in methods:
         for phi in EXTRUDED_ANGLES:
             flat = incline_model_2d(phi, young=EXTRUDED_YOUNG)
-            thickness = float(np.ptp(flat.arrays().vertices[:, 1]))
+            thickness = float(np.ptp(flat.arrays().vertex_position[:, 1]))
             settings = RunSettings(dt=1e-3, n_steps=1000, method=method, penalty=INCLINE_PENALTY,
                                    friction_tolerance=EXTRUDED_FRICTION_TOLERANCE, open_close_force_tolerance=0.0)
             travel_2d = _travel(flat, settings)
@@ -149,7 +149,7 @@ def _slide_topple_run(case_: SlideToppleCase, method: str) -> tuple[float, float
     if not res.completed:
         raise RuntimeError(f"slide-topple-3d {case_.name} {method}: the run did not complete ({res.status})")
     pivot = [1, 2]  # the block's base vertices at its down-dip end (block 0, built first)
-    moved = res.final_state.vertices[pivot] - arrays.vertices[pivot]
+    moved = res.final_state.vertices[pivot] - arrays.vertex_position[pivot]
     dip = np.array([np.cos(np.radians(case_.psi)), 0.0, -np.sin(np.radians(case_.psi))])
     rotation = res.final_state.rotation[0]
     turned = float(np.arccos(np.clip((np.trace(rotation) - 1.0) / 2.0, -1.0, 1.0)))

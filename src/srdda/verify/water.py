@@ -78,10 +78,10 @@ def _plane_model(dim: int, water: tuple[float, float] | None) -> Model:
 def contact_water_forces(arrays: ModelArrays, settings: RunSettings) -> tuple[ContactRecord, np.ndarray]:
     """The contacts of ``arrays`` as built (with ``settings``' contact parameters) and their water forces, N (per m
     in 2D)."""
-    contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertices)))
-    step = contacts.prepare(arrays.vertices, None, True)
+    contacts = ContactModel(arrays, contact_parameters(arrays, settings, model_half_height(arrays.vertex_position)))
+    step = contacts.prepare(arrays.vertex_position, None, True)
     assert step is not None and arrays.water is not None
-    return step.record, contact_water(arrays.water, step.record, contacts.params.distance, arrays.vertices,
+    return step.record, contact_water(arrays.water, step.record, contacts.params.distance, arrays.vertex_position,
                                       boundary_simplices(arrays))
 
 
@@ -92,7 +92,7 @@ def _contact_water(arrays: ModelArrays, penalty: float) -> float:
 
 def crack_water_force(arrays: ModelArrays) -> float:
     """|Σ| of the tension cracks' water forces on the blocks of ``arrays`` as built, N (per m in 2D)."""
-    _, _, forces = WaterCrackTerm(arrays).resultants(arrays, arrays.vertices)
+    _, _, forces = WaterCrackTerm(arrays).resultants(arrays, arrays.vertex_position)
     return float(np.linalg.norm(np.sum(forces, axis=0)))
 
 
