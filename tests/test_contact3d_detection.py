@@ -229,10 +229,10 @@ def test_spring_points_are_material_points_when_the_blocks_strain():
     top = (v @ rotation_matrix_3d(np.array([[0.0, 0.0, np.radians(30.0)]]))[0].T + [1.8, 0.7, 1.0], f)
     arrays = _arrays(box((0.0, 0.0, 0.0), (2.0, 1.5, 1.0)), top, fixed=(0,))
     model = _model(arrays)
-    start = model.detector.detect(arrays.vertices)
+    start = model.detector.detect(arrays.vertex_position)
     assert np.any(start.features[:, 0] == VERTEX_FACE) and np.any(start.features[:, 0] == EDGE_EDGE)
     strain = np.array([[1.0 + 1e-3, 5e-4, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-    moved = model.detector.detect(arrays.vertices @ strain.T)
+    moved = model.detector.detect(arrays.vertex_position @ strain.T)
     assert np.array_equal(moved.key, start.key)
     assert np.max(np.abs(start.shear(start.start_reference))) < 1e-13
     assert np.max(np.abs(moved.shear(start.start_reference))) < 1e-13
