@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import shapely
+from numpy.typing import ArrayLike
 
 from .constraints.checks import redundant_constraints, unheld_massless_blocks
 from .constraints.data import BoltSpec, ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
@@ -267,7 +268,7 @@ class Model:
 
     def add_block(
         self,
-        vertices: Sequence[Sequence[float]],
+        vertices: ArrayLike,
         material: str,
         velocity: Sequence[float] = (0.0, 0.0),
         angular_velocity: float = 0.0,
@@ -315,8 +316,8 @@ class Model:
 
     def add_polyhedron(
         self,
-        vertices: Sequence[Sequence[float]],
-        faces: Sequence[Sequence[int]],
+        vertices: ArrayLike,
+        faces: Sequence[ArrayLike],
         material: str,
         velocity: Sequence[float] = (0.0, 0.0, 0.0),
         angular_velocity: Sequence[float] = (0.0, 0.0, 0.0),
@@ -404,14 +405,14 @@ class Model:
         if self.blocks and self.dim != dim:
             raise ModelError(f"{label}: a model holds polygons (2D) or polyhedra (3D), not both")
 
-    def block_at(self, point: Sequence[float], what: str = "point") -> int:
+    def block_at(self, point: Sequence[float] | np.ndarray, what: str = "point") -> int:
         """Index of the block containing ``point`` (on its boundary counts)."""
         found = self.blocks_at(point)
         if not found:
             raise ModelError(f"{what} at {tuple(float(c) for c in point)} lies in no block")
         return found[0]
 
-    def _resolve(self, point: Sequence[float], block: int | None, what: str) -> tuple[int, np.ndarray]:
+    def _resolve(self, point: Sequence[float] | np.ndarray, block: int | None, what: str) -> tuple[int, np.ndarray]:
         p = np.asarray(point, dtype=float)
         if p.shape != (self.dim,) or not np.all(np.isfinite(p)):
             raise ModelError(f"{what}: a point has {self.dim} finite coordinates in this {self.dim}D model")
@@ -455,7 +456,7 @@ class Model:
         return len(self.measured_points) - 1
 
     # -- constraints, springs, driven points (srdda.constraints) -------------
-    def blocks_at(self, point: Sequence[float]) -> list[int]:
+    def blocks_at(self, point: Sequence[float] | np.ndarray) -> list[int]:
         """Indices of every block containing ``point`` (on a boundary counts)."""
         p = np.asarray(point, dtype=float)
         return [i for i in range(len(self.blocks)) if self._covers(i, p)]
@@ -738,8 +739,8 @@ class Model:
                 raise ModelError(f"no block {b} (the model has {len(self.blocks)})")
             else:
                 chosen.add(int(b))
-        linked = [s.block_a for s in (*self.hinges, *self.springs, *self.bolts)] + [
-            s.block_b for s in (*self.hinges, *self.springs, *self.bolts)] + [p.block for p in self.prescribed]
+        specs: tuple[HingeSpec | SpringSpec | BoltSpec, ...] = (*self.hinges, *self.springs, *self.bolts)
+        linked = [s.block_a for s in specs] + [s.block_b for s in specs] + [p.block for p in self.prescribed]
         if chosen & {b for b in linked if b is not None}:
             raise ModelError("move or turn blocks before adding hinges, springs, driven points or bolts to them")
 
@@ -748,16 +749,16 @@ class Model:
 
         bt = block_type_of_dimension(self.dim)
         for k in chosen:
-            b = self.blocks[k]
-            velocity = np.asarray(b.velocity, dtype=float)
+            block = self.blocks[k]
+            velocity = np.asarray(block.velocity, dtype=float)
             velocity[bt.translation] = rotation @ velocity[bt.translation]
             if self.dim == SOLID.dim:
                 velocity[bt.rotation] = rotation @ velocity[bt.rotation]
-                stress = rotate_symmetric_components_3d(np.asarray([b.stress]), rotation[None], 1.0)[0]
+                stress = rotate_symmetric_components_3d(np.asarray([block.stress]), rotation[None], 1.0)[0]
             else:
-                stress = rotate_symmetric_components(np.asarray([b.stress]), np.arctan2(rotation[1, 0],
-                                                                                        rotation[0, 0]), 1.0)[0]
-            self.blocks[k] = replace(b, vertices=at(b.vertices), velocity=tuple(velocity.tolist()),
+                stress = rotate_symmetric_components(np.asarray([block.stress]), np.arctan2(rotation[1, 0],
+                                                                                            rotation[0, 0]), 1.0)[0]
+            self.blocks[k] = replace(block, vertices=at(block.vertices), velocity=tuple(velocity.tolist()),
                                      stress=tuple(stress.tolist()))
         self.fixed_points = [(b, at(p) if b in chosen else p, k) for b, p, k in self.fixed_points]
         self.point_loads = [(b, at(p) if b in chosen else p, f) for b, p, f in self.point_loads]
@@ -817,8 +818,8 @@ class Model:
         joints = [self.default_joint, *self.joint_materials.values()]
         mat_names = list(self.materials)
         by_mats = np.zeros((len(mat_names), len(mat_names)), dtype=np.int64)
-        for (a, b), name in self.joint_map.items():
-            ia, ib = mat_names.index(a), mat_names.index(b)
+        for (mat_a, mat_b), name in self.joint_map.items():
+            ia, ib = mat_names.index(mat_a), mat_names.index(mat_b)
             by_mats[ia, ib] = by_mats[ib, ia] = joint_names.index(name) + 1
         def joint_rows(named: tuple[str | None, ...] | None, n: int) -> np.ndarray:
             """Rows of the joint table named per edge or face, -1 where the block materials choose."""
@@ -828,7 +829,7 @@ class Model:
         edge_joint = np.concatenate([joint_rows(b.edge_joints, len(b.vertices)) for b in self.blocks]
                                     ).astype(np.int64)
         face_joint = None if mesh is None else np.concatenate(
-            [joint_rows(b.face_joints, len(b.faces)) for b in self.blocks]).astype(np.int64)
+            [joint_rows(b.face_joints, len(b.faces or ())) for b in self.blocks]).astype(np.int64)
         vertices = np.concatenate([b.vertices for b in self.blocks])
         if bt is PLANE and not self.allow_overlap:
             self._check_overlaps(vertices, block_ptr)

@@ -365,7 +365,7 @@ def cut_blocks(
     opening_type: int | None = None,
     hole_points: object = (),
     material_lines: object = (),
-    material_line_types: Sequence[int] = (),
+    material_line_types: Sequence[int] | np.ndarray = (),
     material_points: object = (),
     material_point_types: Sequence[int] = (),
     default_material: int = 0,

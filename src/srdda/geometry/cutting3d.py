@@ -503,10 +503,10 @@ def _ring_arrays(faces: Sequence[np.ndarray], labels: np.ndarray) -> tuple[np.nd
     return np.concatenate(faces).astype(np.int64), _offsets([len(f) for f in faces]), labels.astype(np.int64)
 
 
-def _convex_part(part: object, label: str, tol: float) -> tuple[np.ndarray, list[np.ndarray]]:
+def _convex_part(part: tuple[object, object], label: str, tol: float) -> tuple[np.ndarray, list[np.ndarray]]:
     """A validated convex polyhedron (vertices, outward faces) from (vertices, faces)."""
     try:
-        vertices, faces = part  # type: ignore[misc]
+        vertices, faces = part
         v, outward = normalize_polyhedron(vertices, faces, label)
     except (TypeError, ValueError) as exc:
         raise CuttingError(f"domain {label}: {exc}" if not isinstance(exc, PolyhedronError) else str(exc)) from None
