@@ -9,11 +9,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import shapely
-from numpy.typing import ArrayLike
 
 from .constraints.checks import redundant_constraints, unheld_massless_blocks
 from .constraints.data import BoltSpec, ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
@@ -45,6 +44,9 @@ def _finite(values: Sequence[float] | float, what: str) -> tuple[float, ...]:
     return numbers
 
 
+PlaneKind = Literal["stress", "strain"]  # a 2D model's plane stress or plane strain
+
+
 @dataclass(frozen=True)
 class Material:
     """Block material. ``density`` kg/m³, ``young`` Pa, ``poisson`` (-), 2D idealisation."""
@@ -52,7 +54,7 @@ class Material:
     density: float
     young: float
     poisson: float
-    plane: Literal["stress", "strain"] = "stress"
+    plane: PlaneKind = "stress"
 
     def __post_init__(self) -> None:
         if not 0 <= self.density < np.inf:
@@ -268,7 +270,7 @@ class Model:
 
     def add_block(
         self,
-        vertices: ArrayLike,
+        vertices: Sequence[Sequence[float]] | np.ndarray,
         material: str,
         velocity: Sequence[float] = (0.0, 0.0),
         angular_velocity: float = 0.0,
@@ -316,8 +318,8 @@ class Model:
 
     def add_polyhedron(
         self,
-        vertices: ArrayLike,
-        faces: Sequence[ArrayLike],
+        vertices: Sequence[Sequence[float]] | np.ndarray,
+        faces: Sequence[Sequence[int] | np.ndarray],
         material: str,
         velocity: Sequence[float] = (0.0, 0.0, 0.0),
         angular_velocity: Sequence[float] = (0.0, 0.0, 0.0),
@@ -672,7 +674,7 @@ class Model:
                               else s.base_acceleration.padded(SOLID.dim)) for s in self.stages]
         return out
 
-    def add_box(self, lo: Sequence[float], hi: Sequence[float], material: str, **options: object) -> int:
+    def add_box(self, lo: Sequence[float], hi: Sequence[float], material: str, **options: Any) -> int:
         """Add the axis-aligned box [lo, hi] (3D, m) as a polyhedral block; returns its index.
 
         ``options`` are those of :meth:`add_polyhedron` (velocity, angular_velocity,
@@ -683,7 +685,7 @@ class Model:
             vertices, faces = box(lo, hi, str(options.get("name") or f"block {len(self.blocks)}"))
         except PolyhedronError as exc:
             raise ModelError(str(exc)) from None
-        return self.add_polyhedron(vertices, faces, material, **options)  # type: ignore[arg-type]
+        return self.add_polyhedron(vertices, faces, material, **options)
 
     # -- placing blocks ----------------------------------------------------
     def block_masses(self) -> np.ndarray:

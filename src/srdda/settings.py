@@ -35,6 +35,8 @@ from .solvers import DEFAULT_TOLERANCE, SOLVERS, available_solvers
 
 __all__ = ["RunSettings", "MIN_DT", "MAX_DT", "MAX_STEPS", "MAX_STEP_CUT_FACTOR"]
 
+ContactSolverName = Literal["open-close", "newton"]  # Shi's open-close iteration, or Newton's method
+
 if TYPE_CHECKING:  # the backends' names are a table built at import (srdda.solvers.SOLVERS): a str to mypy
     SolverName = str
 else:
@@ -114,7 +116,7 @@ class RunSettings:
     contacts: bool = True  # detect and resolve block contacts
     # how a step's contact problem is solved: Shi's open-close iteration, or Newton's method with a line search on
     # the step's incremental potential (docs/contacts.md, "The contact solve")
-    contact_solver: Literal["open-close", "newton"] = "open-close"
+    contact_solver: ContactSolverName = "open-close"
     contact_penalty: Annotated[NewtonsPerMetre | None, Field(gt=0)] = None  # k_n (N/m); None: ``penalty``
     auto_penalty: Annotated[Ratio | None, Field(gt=0)] = None  # k_n = this × the largest Young's modulus × 1 m
     shear_ratio: Annotated[Ratio, Field(gt=0)] = 0.4  # k_s / k_n

@@ -18,6 +18,7 @@ from typing import Literal
 
 import numpy as np
 
+from ..integrators.methods import MethodName
 from ..model import JointMaterial, Material, Model
 from ..settings import RunSettings
 from ..simulation import run
@@ -61,7 +62,7 @@ class ImpactRun:
 
 
 def impact_case(dim: int, on_base: bool, dt: float, restitution: float | None = None,
-                penalty: float = IMPACT_PENALTY, method: str = "srdda",
+                penalty: float = IMPACT_PENALTY, method: MethodName = "srdda",
                 contact_solver: Literal["open-close", "newton"] = "open-close") -> ImpactRun:
     """Run the impact for :data:`DURATION` at ``dt`` and measure it (the blocks have parted by then)."""
     settings = RunSettings(dt=dt, n_steps=int(round(DURATION / dt)), method=method, contact_penalty=penalty,

@@ -554,7 +554,7 @@ def _remove_collinear(vertices: np.ndarray, block_ptr: np.ndarray, edge_joint: n
     return vertices[keep], new_ptr, edge_joint[keep]
 
 
-def _materials(polygons: np.ndarray, default: int, lines: object, line_types: Sequence[int],
+def _materials(polygons: np.ndarray, default: int, lines: object, line_types: Sequence[int] | np.ndarray,
                points: object, point_types: Sequence[int]) -> np.ndarray:
     """Block material labels: default, then material lines (later win), then material points."""
     material = np.full(len(polygons), default, dtype=np.int64)

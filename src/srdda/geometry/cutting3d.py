@@ -541,7 +541,8 @@ def convex_hull_polyhedron(points: object, label: str = "domain") -> tuple[np.nd
     return halfspace_polyhedron(hull.equations[:, :3], -hull.equations[:, 3], lo - margin, hi + margin, label)
 
 
-def halfspace_polyhedron(normals: object, offsets: object, lo: Sequence[float], hi: Sequence[float],
+def halfspace_polyhedron(normals: object, offsets: object, lo: Sequence[float] | np.ndarray,
+                         hi: Sequence[float] | np.ndarray,
                          label: str = "polyhedron") -> tuple[np.ndarray, list[np.ndarray]]:
     """The convex polyhedron {x in [lo, hi] : normals[k]·x <= offsets[k] for every k}: (vertices, outward faces).
 

@@ -478,7 +478,7 @@ _I, _J = np.triu_indices(3)  # the six distinct entries of a symmetric 3x3 tenso
 _BOX_FACES = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
 
 
-def box(lo: Sequence[float], hi: Sequence[float], label: str = "box") -> Block3D:
+def box(lo: Sequence[float] | np.ndarray, hi: Sequence[float] | np.ndarray, label: str = "box") -> Block3D:
     """The axis-aligned box [lo, hi]: 8 vertices, 6 outward quadrilateral faces."""
     lo_a, hi_a = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     if lo_a.shape != (3,) or hi_a.shape != (3,):

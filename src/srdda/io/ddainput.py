@@ -15,13 +15,13 @@ import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import shapely
 
 from ..geometry.cutting2d import NO_JOINT, BlockCut, CuttingError, cut_blocks
-from ..model import JointMaterial, Material, Model, ModelError
+from ..model import JointMaterial, Material, Model, ModelError, PlaneKind
 from ..settings import RunSettings
 from ..units import UNIT_SYSTEMS, UnitSystem, detect_unit_system
 
@@ -303,7 +303,7 @@ class DDAInput:
         """The srdda Model: blocks, materials, joint materials, fixed/load/measured points, gravity."""
         cut = self.cut() if cut is None else cut
         model = Model(gravity=(0.0, -self.gravity()))
-        plane: Literal["stress", "strain"] = "strain" if self.plane_strain else "stress"
+        plane: PlaneKind = "strain" if self.plane_strain else "stress"
         used = np.unique(cut.block_material)
         for k in used:
             if not 1 <= k <= len(self.block_materials):

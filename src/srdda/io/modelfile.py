@@ -16,7 +16,6 @@ from typing import Any
 
 import numpy as np
 import tomli_w
-from numpy.typing import ArrayLike
 from pydantic import ValidationError
 
 from ..cutmodel import add_cut_polyhedra
@@ -197,8 +196,8 @@ def _add_block(model: Model, b: BlockSection, label: str) -> None:
         return
     if b.edge_joints is not None:
         raise ModelError("edge_joints are for polygons (2D)")
-    vertices: ArrayLike
-    faces: Sequence[ArrayLike]
+    vertices: Sequence[Sequence[float]] | np.ndarray
+    faces: Sequence[Sequence[int] | np.ndarray]
     if b.box is not None:
         vertices, faces = box(*b.box, label)
     else:
