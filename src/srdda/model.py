@@ -29,7 +29,8 @@ from .kinematics.update3d import rotate_symmetric_components_3d
 if TYPE_CHECKING:
     from .stages import Stage, StagePlan
 
-__all__ = ["JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load", "elasticity_matrix"]
+__all__ = ["JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load", "PlaneKind",
+           "elasticity_matrix"]
 
 
 class ModelError(ValueError):

@@ -33,7 +33,7 @@ from .backends.arrays import DeviceName, GPU_SOLVERS, resolve_device
 from .units import reject_boolean, to_si
 from .solvers import DEFAULT_TOLERANCE, SOLVERS, available_solvers
 
-__all__ = ["RunSettings", "MIN_DT", "MAX_DT", "MAX_STEPS", "MAX_STEP_CUT_FACTOR"]
+__all__ = ["RunSettings", "ContactSolverName", "MIN_DT", "MAX_DT", "MAX_STEPS", "MAX_STEP_CUT_FACTOR"]
 
 ContactSolverName = Literal["open-close", "newton"]  # Shi's open-close iteration, or Newton's method
 

@@ -20,7 +20,7 @@ from typing import Any, Literal, get_args
 import numpy as np
 import scipy.sparse
 
-__all__ = ["ArrayBackend", "DEVICES", "GPU_MIN_BLOCKS", "GPU_SOLVERS", "GpuUnavailable", "cupy_backend",
+__all__ = ["ArrayBackend", "DEVICES", "DeviceName", "GPU_MIN_BLOCKS", "GPU_SOLVERS", "GpuUnavailable", "cupy_backend",
            "gpu_problem", "numpy_backend", "resolve_device"]
 
 DeviceName = Literal["cpu", "gpu", "auto"]

@@ -23,7 +23,7 @@ from typing import Literal, get_args
 
 from .schemes import TimeScheme
 
-__all__ = ["Method", "METHODS", "method_preset"]
+__all__ = ["Method", "METHODS", "MethodName", "method_preset"]
 
 MethodName = Literal["dda0", "dda1", "srdda"]
 METHODS: tuple[MethodName, ...] = get_args(MethodName)

@@ -24,7 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal, get_args
 
-__all__ = ["SchemeCoefficients", "TimeScheme", "alpha_parameters", "SCHEMES"]
+__all__ = ["SchemeCoefficients", "SchemeName", "TimeScheme", "alpha_parameters", "SCHEMES"]
 
 SchemeName = Literal["shi", "paper", "chung-hulbert"]
 SCHEMES: tuple[SchemeName, ...] = get_args(SchemeName)
