@@ -33,6 +33,16 @@ def test_round_trip_gives_the_same_model(tmp_path):
         assert np.array_equal(getattr(a.attached, name), getattr(b.attached, name)), name
 
 
+def test_a_sine_point_load_is_a_clear_error_when_saved(tmp_path):
+    # a model file's point load is a force or a table; a sine one used to fail with a TypeError
+    model, settings = load_model(DATA / "two_blocks.toml")
+    model.add_point_load(model.point_loads[0][1], srdda.TimeHistory.sine((1.0, 0.0), 0.5),
+                         block=model.point_loads[0][0])
+    with pytest.raises(ModelFileError, match="sine history"):
+        save_model(model, settings, tmp_path / "copy.toml")
+    assert not (tmp_path / "copy.toml").exists()
+
+
 def test_model_file_runs():
     model, settings = load_model(DATA / "two_blocks.toml")
     assert srdda.run(model, settings).completed

@@ -87,7 +87,7 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
     fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
     values = block_values(res, 0, color)
     coll = plot_blocks(ax, verts[0], res.block_ptr, values)
-    if values is not None:
+    if color is not None:  # then there are values
         all_values = np.concatenate([block_values(res, int(i), color) for i in frames])
         coll.set_clim(float(all_values.min()), float(all_values.max()) or 1.0)
         fig.colorbar(coll, ax=ax, label=quantity_label(res, color))
@@ -101,7 +101,7 @@ def _write_animation(res: StoredResult, out: Path, fps: int, max_frames: int, co
 
     def draw(i: int) -> list:
         coll.set_verts([verts[i][a:b] for a, b in zip(ptr[:-1], ptr[1:])])
-        if values is not None:
+        if color is not None:
             coll.set_array(block_values(res, i, color))
         for k, line in enumerate(trails):
             line.set_data(mp[: i + 1, k, 0], mp[: i + 1, k, 1])
@@ -117,6 +117,7 @@ def _write_solid_animation(res: StoredResult, out: Path, writer: animation.Abstr
     verts = history(res, "vertices")
     mp = history(res, "measured_position")
     mesh = res.mesh
+    assert mesh is not None  # a 3D result's
     if pyvista_renders():
         _write_rendered_animation(res, out, writer, frames, color, dpi, progress)
         return
@@ -124,7 +125,7 @@ def _write_solid_animation(res: StoredResult, out: Path, writer: animation.Abstr
     ax = fig.add_subplot(projection="3d")
     values = block_values(res, 0, color)
     coll = plot_solid_blocks(ax, verts[0], mesh, values)
-    if values is not None:
+    if color is not None:  # then there are values
         all_values = np.concatenate([block_values(res, int(i), color) for i in frames])
         coll.set_clim(float(all_values.min()), float(all_values.max()) or 1.0)
         fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.6)
@@ -133,7 +134,7 @@ def _write_solid_animation(res: StoredResult, out: Path, writer: animation.Abstr
 
     def draw(i: int) -> list:
         coll.set_verts(solid_faces(verts[i], mesh)[0])
-        if values is not None:
+        if color is not None:
             coll.set_array(block_values(res, i, color)[mesh.face_block])
         for k, line in enumerate(trails):
             line.set_data_3d(*mp[: i + 1, k].T)
@@ -167,6 +168,7 @@ def _write_rendered_animation(res: StoredResult, out: Path, writer: animation.Ab
     ax.set_axis_off()
     shown = ax.imshow(image(0))
     if clim is not None:
+        assert color is not None  # clim comes with a quantity
         fig.colorbar(cm.ScalarMappable(mcolors.Normalize(*clim), "viridis"), ax=ax, label=quantity_label(res, color),
                      shrink=0.6)
     where = {int(i): k for k, i in enumerate(frames)}

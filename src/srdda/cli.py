@@ -12,8 +12,10 @@ import json
 import os
 import sys
 import warnings
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
+from typing import Any, Literal
 
 import click
 import numpy as np
@@ -22,7 +24,7 @@ from tqdm import tqdm
 
 from . import __version__
 from .backends.arrays import DEVICES, GpuUnavailable, cupy_backend, gpu_problem
-from .integrators.methods import METHODS
+from .integrators.methods import METHODS, MethodName
 from .cli_results import (animate_command, history_command, plot_command, prepare_resume_run, report_paper,
                           vtk_command)
 from .io.convert import convert
@@ -77,7 +79,7 @@ def _compile(model: Model, settings: RunSettings, source: str) -> ModelArrays:
     return arrays
 
 
-def _override(settings: RunSettings, option: str, **changes: object) -> RunSettings:
+def _override(settings: RunSettings, option: str, **changes: Any) -> RunSettings:
     """``settings`` with ``changes`` from a command-line option, validated like a model file."""
     try:
         return replace(settings, **changes)
@@ -100,9 +102,11 @@ def save_histories(results_file: Path, result: Result, out: Path) -> tuple[Path,
     out.mkdir(parents=True, exist_ok=True)
     stored = read_results(results_file, names=HISTORIES)
     arrays = {name: stored.array(name) for name in HISTORIES}
-    np.savez_compressed(out / "histories.npz", **arrays, energy_keys=np.array(stored.energy_names))
+    # numpy's stub matches the ** names against allow_pickle too (HISTORIES holds no such name)
+    np.savez_compressed(out / "histories.npz", **arrays,  # type: ignore[arg-type]
+                        energy_keys=np.array(stored.energy_names))
     steps = arrays["step"]
-    summary = {"method": result.method, "status": result.status, "blocks": list(result.block_names)}
+    summary: dict[str, object] = {"method": result.method, "status": result.status, "blocks": list(result.block_names)}
     if len(steps) and result.final_state is not None:
         summary.update(run_summary(stored, result.final_state))
     else:
@@ -187,7 +191,7 @@ def run_command(model: str | None, method: str | None, steps: int | None, end_ti
         total = None if arrays.stages else settings.n_steps  # a staged run: its stages say how many
         store_path, desc, start = store.path, settings.method, f"writing {store.path}"
 
-        def go(progress):
+        def go(progress: Callable[[int], None] | None = None) -> Result:
             return run(arrays, settings, progress=progress, recorders=[store], keep_history=False)
     out_dir = store_path.parent
     click.echo(start)
@@ -324,7 +328,8 @@ def print_rows(rows: list[dict]) -> None:
 @click.option("--report", "report_dir", type=click.Path(file_okay=False), default=None,
               help="Also write report.md/report.html with every table and figure (and the runs) into this folder.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def paper_command(example: str, method: str, as_json: bool, report_dir: str | None, quiet: bool) -> None:
+def paper_command(example: str, method: MethodName | Literal["all"], as_json: bool, report_dir: str | None,
+                  quiet: bool) -> None:
     """Run one of the paper's examples and print its tables beside the paper's."""
     methods = list(METHODS) if method == "all" else [method]
     names = list(EXAMPLES) if example == "all" else [example]

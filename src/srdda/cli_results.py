@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 from tqdm import tqdm
 
+from .integrators.methods import MethodName
 from .io.results_store import (ResultsDamageWarning, ResultsFileError, ResultsInUseError, ResultsWriteError,
                                Resumption, StoredResult, prepare_resume, read_results)
 
@@ -63,7 +64,7 @@ def prepare_resume_run(path: str, flush_every: int | None = None) -> Resumption:
     return prepared
 
 
-def report_paper(directory: str, names: list[str], methods: list[str], quiet: bool = False,
+def report_paper(directory: str, names: list[str], methods: list[MethodName], quiet: bool = False,
                  ) -> tuple[list[dict], bool]:
     """Run paper examples and write the report (``srdda paper ... --report DIR``).
 

@@ -20,12 +20,12 @@ import time
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
 from .model import JointTable, Model, ModelArrays, ModelError
-from .settings import RunSettings
+from .settings import ContactSolverName, RunSettings
 from .simulation import run_single
 from .step import shi_step_bound
 
@@ -62,7 +62,7 @@ class FailureCriterion:
 
     steps: int = 60
     dt: float | None = None
-    contact_solver: Literal["open-close", "newton"] = "newton"
+    contact_solver: ContactSolverName = "newton"
     decay: float = 0.5
     acceleration: float = 1e-4
 

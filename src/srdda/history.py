@@ -13,6 +13,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["TimeHistory", "MotionHistory", "HistoryError"]
 
@@ -37,7 +38,7 @@ class TimeHistory:
     amplitude: tuple[float, ...] | None = None
     period: float | None = None
     phase: float = 0.0
-    function: Callable[[float], Sequence[float]] | None = None
+    function: Callable[[float], ArrayLike] | None = None
 
     def __post_init__(self) -> None:
         given = [self.constant is not None, self.table is not None, self.amplitude is not None,
@@ -84,7 +85,9 @@ class TimeHistory:
             tab = self.table
             return np.array([np.interp(t, tab[:, 0], column) for column in tab[:, 1:].T])
         if self.amplitude is not None:
+            assert self.period is not None  # __post_init__: a sine has a period
             return np.asarray(self.amplitude) * np.sin(2.0 * np.pi * t / self.period + self.phase)
+        assert self.function is not None  # exactly one form is given
         return np.asarray(self.function(t), dtype=float).ravel()
 
     def integral(self, t: float) -> np.ndarray:
@@ -94,6 +97,7 @@ class TimeHistory:
         if self.table is not None:
             return self._table_integral(t)
         if self.amplitude is not None:
+            assert self.period is not None  # __post_init__: a sine has a period
             w = 2.0 * np.pi / self.period
             return np.asarray(self.amplitude) * (np.cos(self.phase) - np.cos(w * t + self.phase)) / w
         from scipy.integrate import quad  # only callables need it: keeps start-up fast
@@ -116,6 +120,7 @@ class TimeHistory:
             seg = np.diff(knots)[:, None] / 6.0 * (f[: n - 1] + 4.0 * f[n:] + f[1:n])
             return np.sum(seg, axis=0) * (1.0 if t >= 0 else -1.0)
         if self.amplitude is not None:
+            assert self.period is not None  # __post_init__: a sine has a period
             w = 2.0 * np.pi / self.period
             p = self.phase
             return np.asarray(self.amplitude) * (t * np.cos(p) / w - (np.sin(w * t + p) - np.sin(p)) / w**2)
@@ -127,6 +132,7 @@ class TimeHistory:
     def _table_integral(self, t: float) -> np.ndarray:
         """Exact integral of the piecewise-linear (held at the ends) table from 0 to t, vectorised."""
         tab = self.table
+        assert tab is not None  # called for a table history
         lo, hi = min(0.0, t), max(0.0, t)
         inner = tab[:, 0][(tab[:, 0] > lo) & (tab[:, 0] < hi)]
         knots = np.concatenate([[lo], inner, [hi]])
@@ -143,9 +149,11 @@ class TimeHistory:
             tab = self.table
             return TimeHistory(table=np.hstack([tab, np.zeros((len(tab), size + 1 - tab.shape[1]))]))
         if self.amplitude is not None:
+            assert self.period is not None  # __post_init__: a sine has a period
             return TimeHistory.sine((*self.amplitude, *(0.0,) * (size - len(self.amplitude))), self.period,
                                     self.phase)
         function = self.function
+        assert function is not None  # exactly one form is given
         return TimeHistory(function=lambda t: np.pad(np.asarray(function(t), dtype=float).ravel(),
                                                      (0, size - len(np.ravel(function(t))))))
 
@@ -157,6 +165,7 @@ class TimeHistory:
             return {"table": np.asarray(self.table).tolist()}
         if self.amplitude is not None:
             return {"amplitude": list(self.amplitude), "period": self.period, "phase": self.phase}
+        assert self.constant is not None  # exactly one form is given
         return {"constant": list(self.constant)}
 
     @staticmethod

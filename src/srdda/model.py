@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from .stages import Stage, StagePlan
 
 __all__ = ["AttachedPoints", "JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load",
-           "elasticity_matrix"]
+           "PlaneKind", "elasticity_matrix"]
 
 
 class ModelError(ValueError):
@@ -47,6 +47,9 @@ def _finite(values: Sequence[float] | float, what: str) -> tuple[float, ...]:
     return numbers
 
 
+PlaneKind = Literal["stress", "strain"]  # a 2D model's plane stress or plane strain
+
+
 @dataclass(frozen=True)
 class Material:
     """Block material. ``density`` kg/m³, ``young`` Pa, ``poisson`` (-), 2D idealisation."""
@@ -54,7 +57,7 @@ class Material:
     density: float
     young: float
     poisson: float
-    plane: Literal["stress", "strain"] = "stress"
+    plane: PlaneKind = "stress"
 
     def __post_init__(self) -> None:
         if not 0 <= self.density < np.inf:
@@ -322,7 +325,7 @@ class Model:
 
     def add_block(
         self,
-        vertices: Sequence[Sequence[float]],
+        vertices: Sequence[Sequence[float]] | np.ndarray,
         material: str,
         velocity: Sequence[float] = (0.0, 0.0),
         angular_velocity: float = 0.0,
@@ -370,8 +373,8 @@ class Model:
 
     def add_polyhedron(
         self,
-        vertices: Sequence[Sequence[float]],
-        faces: Sequence[Sequence[int]],
+        vertices: Sequence[Sequence[float]] | np.ndarray,
+        faces: Sequence[Sequence[int] | np.ndarray],
         material: str,
         velocity: Sequence[float] = (0.0, 0.0, 0.0),
         angular_velocity: Sequence[float] = (0.0, 0.0, 0.0),
@@ -459,14 +462,14 @@ class Model:
         if self.blocks and self.dim != dim:
             raise ModelError(f"{label}: a model holds polygons (2D) or polyhedra (3D), not both")
 
-    def block_at(self, point: Sequence[float], what: str = "point") -> int:
+    def block_at(self, point: Sequence[float] | np.ndarray, what: str = "point") -> int:
         """Index of the block containing ``point`` (on its boundary counts)."""
         found = self.blocks_at(point)
         if not found:
             raise ModelError(f"{what} at {tuple(float(c) for c in point)} lies in no block")
         return found[0]
 
-    def _resolve(self, point: Sequence[float], block: int | None, what: str) -> tuple[int, np.ndarray]:
+    def _resolve(self, point: Sequence[float] | np.ndarray, block: int | None, what: str) -> tuple[int, np.ndarray]:
         p = np.asarray(point, dtype=float)
         if p.shape != (self.dim,) or not np.all(np.isfinite(p)):
             raise ModelError(f"{what}: a point has {self.dim} finite coordinates in this {self.dim}D model")
@@ -510,7 +513,7 @@ class Model:
         return len(self.measured_points) - 1
 
     # -- constraints, springs, driven points (srdda.constraints) -------------
-    def blocks_at(self, point: Sequence[float]) -> list[int]:
+    def blocks_at(self, point: Sequence[float] | np.ndarray) -> list[int]:
         """Indices of every block containing ``point`` (on a boundary counts)."""
         p = np.asarray(point, dtype=float)
         return [i for i in range(len(self.blocks)) if self._covers(i, p)]
@@ -726,7 +729,7 @@ class Model:
                               else s.base_acceleration.padded(SOLID.dim)) for s in self.stages]
         return out
 
-    def add_box(self, lo: Sequence[float], hi: Sequence[float], material: str, **options: object) -> int:
+    def add_box(self, lo: Sequence[float], hi: Sequence[float], material: str, **options: Any) -> int:
         """Add the axis-aligned box [lo, hi] (3D, m) as a polyhedral block; returns its index.
 
         ``options`` are those of :meth:`add_polyhedron` (velocity, angular_velocity,
@@ -737,7 +740,7 @@ class Model:
             vertices, faces = box(lo, hi, str(options.get("name") or f"block {len(self.blocks)}"))
         except PolyhedronError as exc:
             raise ModelError(str(exc)) from None
-        return self.add_polyhedron(vertices, faces, material, **options)  # type: ignore[arg-type]
+        return self.add_polyhedron(vertices, faces, material, **options)
 
     # -- placing blocks ----------------------------------------------------
     def block_masses(self) -> np.ndarray:
@@ -793,8 +796,8 @@ class Model:
                 raise ModelError(f"no block {b} (the model has {len(self.blocks)})")
             else:
                 chosen.add(int(b))
-        linked = [s.block_a for s in (*self.hinges, *self.springs, *self.bolts)] + [
-            s.block_b for s in (*self.hinges, *self.springs, *self.bolts)] + [p.block for p in self.prescribed]
+        specs: tuple[HingeSpec | SpringSpec | BoltSpec, ...] = (*self.hinges, *self.springs, *self.bolts)
+        linked = [s.block_a for s in specs] + [s.block_b for s in specs] + [p.block for p in self.prescribed]
         if chosen & {b for b in linked if b is not None}:
             raise ModelError("move or turn blocks before adding hinges, springs, driven points or bolts to them")
 
@@ -803,16 +806,16 @@ class Model:
 
         bt = block_type_of_dimension(self.dim)
         for k in chosen:
-            b = self.blocks[k]
-            velocity = np.asarray(b.velocity, dtype=float)
+            block = self.blocks[k]
+            velocity = np.asarray(block.velocity, dtype=float)
             velocity[bt.translation] = rotation @ velocity[bt.translation]
             if self.dim == SOLID.dim:
                 velocity[bt.rotation] = rotation @ velocity[bt.rotation]
-                stress = rotate_symmetric_components_3d(np.asarray([b.stress]), rotation[None], 1.0)[0]
+                stress = rotate_symmetric_components_3d(np.asarray([block.stress]), rotation[None], 1.0)[0]
             else:
-                stress = rotate_symmetric_components(np.asarray([b.stress]), np.arctan2(rotation[1, 0],
-                                                                                        rotation[0, 0]), 1.0)[0]
-            self.blocks[k] = replace(b, vertices=at(b.vertices), velocity=tuple(velocity.tolist()),
+                stress = rotate_symmetric_components(np.asarray([block.stress]), np.arctan2(rotation[1, 0],
+                                                                                            rotation[0, 0]), 1.0)[0]
+            self.blocks[k] = replace(block, vertices=at(block.vertices), velocity=tuple(velocity.tolist()),
                                      stress=tuple(stress.tolist()))
         self.fixed_points = [(b, at(p) if b in chosen else p, k) for b, p, k in self.fixed_points]
         self.point_loads = [(b, at(p) if b in chosen else p, f) for b, p, f in self.point_loads]

@@ -29,7 +29,8 @@ MOVING_ALPHA = 0.75  # moving blocks of a 3D model with points, so that points i
 
 def material_colors(n: int) -> list[tuple[float, float, float, float]]:
     """One light colour per block material (matplotlib's Pastel1, then Pastel2)."""
-    palette = [*plt.get_cmap("Pastel1").colors, *plt.get_cmap("Pastel2").colors]
+    # matplotlib's stubs type get_cmap as a Colormap; these two are ListedColormaps, which have colors
+    palette = [*plt.get_cmap("Pastel1").colors, *plt.get_cmap("Pastel2").colors]  # type: ignore[attr-defined]
     return [palette[k % len(palette)] for k in range(n)]
 
 
@@ -71,7 +72,7 @@ def fig_model_setup(model: Model, title: str = "") -> Figure:
         ax = fig.axes[0]
         coll = ax.collections[0]
         coll.set_facecolor([colors[m] for m in arrays.block_material])
-        coll.set_hatch(None)
+        coll.set_hatch(None)  # type: ignore[arg-type]  # matplotlib's stubs say str; None clears the hatch
         for b in np.flatnonzero(arrays.block_fixed):  # hatch the fixed blocks over their material colour
             ax.fill(*arrays.vertex_position[arrays.block_ptr[b]:arrays.block_ptr[b + 1]].T, facecolor="none",
                     edgecolor="0.3", hatch="//", lw=0)
@@ -91,6 +92,7 @@ def fig_model_setup(model: Model, title: str = "") -> Figure:
 def _fig_solid_setup(model: Model, arrays: ModelArrays, colors: list, joints: dict[int, np.ndarray],
                      joint_colors: dict[int, str], joint_names: list[str], title: str) -> Figure:
     """The 3D model: pyvista's picture in a matplotlib figure (title, legend), or matplotlib's 3D axes."""
+    assert arrays.mesh is not None  # a 3D model's
     attached, links = arrays.attached, arrays.links
     pts = attached.point_position
     block_colors = [colors[m] for m in arrays.block_material]

@@ -25,7 +25,7 @@ metre of thickness in 2D, J in 3D.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, overload
 
 import matplotlib
 
@@ -213,6 +213,10 @@ def plot_blocks(ax: plt.Axes, vertices: np.ndarray, block_ptr: np.ndarray, value
     return coll
 
 
+@overload
+def block_values(res: Results, index: int, color: str) -> np.ndarray: ...
+@overload
+def block_values(res: Results, index: int, color: None) -> None: ...
 def block_values(res: Results, index: int, color: str | None) -> np.ndarray | None:
     """One value per block at recorded row ``index``: ``speed``, ``area_change`` or a :func:`history` name."""
     if color is None:
@@ -343,6 +347,7 @@ def fig_model(res: Results, index: int = -1, color: str | None = "speed", trails
         ax.add_collection(PolyCollection([verts[index][ptr[b]:ptr[b + 1]] for b in np.flatnonzero(removed)],
                                          facecolor="none", edgecolor="0.5", linestyle="--", linewidth=0.6))
     if values is not None:
+        assert color is not None  # block_values gives values for a quantity only
         fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.7)
     if trails:
         _trails(ax, res, index)
@@ -362,11 +367,12 @@ def plot_bolts(ax: plt.Axes, ends: np.ndarray, broken: np.ndarray, force: np.nda
     written at their middle (kN per m when ``force`` is given), broken dashed grey."""
     broken = np.asarray(broken, dtype=bool)
     for k, (a, b) in enumerate(np.asarray(ends)[:, :, :2]):
-        style = dict(color="0.5", ls="--") if broken[k] else dict(color="tab:red", ls="-")
-        ax.plot([a[0], b[0]], [a[1], b[1]], lw=2.0, marker="o", ms=3, label=label if k == 0 else None, **style)
+        color, ls = ("0.5", "--") if broken[k] else ("tab:red", "-")
+        ax.plot([a[0], b[0]], [a[1], b[1]], lw=2.0, marker="o", ms=3, label=label if k == 0 else None, color=color,
+                ls=ls)
         if force is not None:
             ax.annotate("broken" if broken[k] else f"{force[k] / 1e3:.3g} kN", 0.5 * (a + b), xytext=(3, 3),
-                        textcoords="offset points", fontsize=7, color=style["color"])
+                        textcoords="offset points", fontsize=7, color=color)
 
 
 def fig_bolt_forces(res: Results) -> Figure:
@@ -448,6 +454,7 @@ def fig_solid_model(res: Results, index: int = -1, color: str | None = "speed", 
         ax = fig.add_subplot(projection="3d")
         coll = plot_solid_blocks(ax, verts[index], res.mesh, values)
         if values is not None:
+            assert color is not None  # block_values gives values for a quantity only
             fig.colorbar(coll, ax=ax, label=quantity_label(res, color), shrink=0.6)
         if trails:
             _trails(ax, res, index)
@@ -464,6 +471,7 @@ def fig_solid_model(res: Results, index: int = -1, color: str | None = "speed", 
     ax.set_axis_off()
     ax.set_title(step_title(res, index))
     if values is not None:
+        assert clim is not None and color is not None  # both go with the values
         mappable = cm.ScalarMappable(mcolors.Normalize(*clim), "viridis")
         fig.colorbar(mappable, ax=ax, label=quantity_label(res, color), shrink=0.6)
     return fig
@@ -493,7 +501,7 @@ def mark_stages(ax: plt.Axes, res: Results, names: bool = True) -> None:
 
 
 def fig_time_series(runs: Results | Mapping[str, Results], quantity: str,
-                    blocks: Sequence[int] | None = None) -> Figure:
+                    blocks: Sequence[int] | np.ndarray | None = None) -> Figure:
     """A recorded quantity against time, one line per block (or measured point; ``blocks`` picks them)."""
     runs = runs if isinstance(runs, Mapping) else {method_label(runs.method): runs}
     fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
@@ -545,7 +553,7 @@ def _zoom(ax: plt.Axes, main: plt.Axes, paths: Sequence[np.ndarray], colors: Seq
     main.indicate_inset((box[0], box[2], box[1] - box[0], box[3] - box[2]), edgecolor="0.3")
 
 
-def fig_swing_trajectories(results: Mapping[str, Results], pivot: Sequence[float] = (0.0, 0.0),
+def fig_swing_trajectories(results: Mapping[str, Results], pivot: Sequence[float] | np.ndarray = (0.0, 0.0),
                            points: Sequence[int] | None = None, zoom: float | None = None,
                            title: str = "", names: Sequence[str] | None = None) -> Figure:
     """Figs. 4 and 6: measured-point paths per method with a zoomed view, and their radial offset.
@@ -632,8 +640,8 @@ def fig_nunchaku(results: Mapping[str, Results], hinge_points: tuple[int, int] =
     fig12.legend(paths_h + omega_h, paths_l + omega_l, loc="outside upper center", ncols=4, fontsize="small")
     fig13, ax13 = plt.subplots(figsize=(6, 5), layout="constrained")
     for method, res in results.items():
-        c = history(res, "measured_position")[:, tip_point]
-        ax13.plot(c[:, 0], c[:, 1], lw=0.9, label=method_label(method))
+        tip = history(res, "measured_position")[:, tip_point]
+        ax13.plot(tip[:, 0], tip[:, 1], lw=0.9, label=method_label(method))
     ax13.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title="point C")
     ax13.legend(loc="upper center", fontsize="small")  # the swing leaves the middle above the lowest point empty
     if title:

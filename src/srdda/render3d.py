@@ -59,10 +59,11 @@ def _faces_polydata(pv: Any, vertices: np.ndarray, face_ptr: np.ndarray, face_ve
 
 def render_blocks(vertices: np.ndarray, mesh: Any, values: np.ndarray | None = None,
                   colors: Sequence[Any] | None = None, clim: tuple[float, float] | None = None,
-                  cmap: str = "viridis", opacity: Sequence[float] | None = None,
+                  cmap: str = "viridis", opacity: Sequence[float] | np.ndarray | None = None,
                   points: Sequence[tuple[np.ndarray, str, float]] = (),
                   segments: Sequence[tuple[np.ndarray, str, float]] = (),
-                  size: tuple[int, int] = (900, 700), bounds: Sequence[float] | None = None) -> np.ndarray:
+                  size: tuple[int, int] = (900, 700), bounds: Sequence[float] | np.ndarray | None = None
+                  ) -> np.ndarray:
     """An RGB image (h, w, 3) of 3D blocks rendered off-screen with pyvista.
 
     ``mesh`` is a :class:`~srdda.geometry.polyhedron.PolyhedronMesh`; each

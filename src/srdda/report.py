@@ -34,7 +34,7 @@ import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from . import __version__, plotting  # noqa: E402
-from .integrators.methods import METHODS  # noqa: E402
+from .integrators.methods import METHODS, MethodName  # noqa: E402
 from .io.results_store import ResultsStore  # noqa: E402
 from .model import Model  # noqa: E402
 from .results import Result  # noqa: E402
@@ -205,7 +205,7 @@ def _generic(results: dict[str, Result], model: Model) -> FigureList:
 
 
 # -- running -------------------------------------------------------------------------
-def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = METHODS,
+def run_examples(names: Sequence[str] | None = None, methods: Sequence[MethodName] = METHODS,
                  runs_dir: str | Path | None = None,
                  progress: Callable[[str, str, int, int], None] | None = None) -> list[ExampleRun]:
     """Run paper examples (all registered ones by default) under ``methods``; tables and figures.
@@ -249,6 +249,7 @@ def run_examples(names: Sequence[str] | None = None, methods: Sequence[str] = ME
         except Exception as exc:  # a diverged run may lack the steps a table needs: say so in the report
             errors.append(f"tables: {type(exc).__name__}: {exc}")
         try:
+            assert model is not None, "no method was run"
             paper_fig = f" (the paper's Fig. {CONFIG_FIGURES[name]})" if name in CONFIG_FIGURES else ""
             figures = [(f"The model as built for these runs{paper_fig}: fixed blocks grey, fixed points black "
                         "triangles, springs green lines between open circles, hinges black rings, driven points "
@@ -322,9 +323,10 @@ def pivot_table(rows: Sequence[dict], methods: Sequence[str]) -> tuple[list[str]
     error to the exact value follows in parentheses where there is one.
     """
     keys: dict[tuple[str, object], dict] = {}
-    for r in rows:
-        entry = keys.setdefault((r["quantity"], r["step"]), {"exact": r["exact"], "unit": r.get("unit", "")})
-        entry[r["method"]] = r
+    for given in rows:
+        entry = keys.setdefault((given["quantity"], given["step"]), {"exact": given["exact"],
+                                                                     "unit": given.get("unit", "")})
+        entry[given["method"]] = given
     header = ["quantity", "unit", "CS (step)", "exact"]
     for m in methods:
         header += [f"{plotting.method_label(m)} ours", f"{plotting.method_label(m)} paper"]
@@ -449,7 +451,7 @@ def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str
     return md_path, html_path
 
 
-def make_report(directory: str | Path, names: Sequence[str] | None = None, methods: Sequence[str] = METHODS,
+def make_report(directory: str | Path, names: Sequence[str] | None = None, methods: Sequence[MethodName] = METHODS,
                 progress: Callable[[str, str, int, int], None] | None = None,
                 command: str | None = None) -> tuple[list[ExampleRun], tuple[Path, Path]]:
     """Run the examples (results files under ``DIR/runs``) and write the report into ``directory``."""

@@ -20,19 +20,27 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from typing import Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, ClassVar, Literal
 
 from pydantic import (AfterValidator, AliasChoices, BeforeValidator, ConfigDict, Field, ValidationInfo,
                       field_validator, model_validator)
 from pydantic.dataclasses import dataclass
+from pydantic.fields import FieldInfo
 
-from .integrators.methods import METHODS, Method, method_preset
-from .integrators.schemes import SCHEMES
-from .backends.arrays import DEVICES, GPU_SOLVERS, resolve_device
+from .integrators.methods import Method, MethodName, method_preset
+from .integrators.schemes import SchemeName
+from .backends.arrays import DeviceName, GPU_SOLVERS, resolve_device
 from .units import reject_boolean, to_si
 from .solvers import DEFAULT_TOLERANCE, SOLVERS, available_solvers
 
-__all__ = ["RunSettings", "MIN_DT", "MAX_DT", "MAX_STEPS", "MAX_STEP_CUT_FACTOR"]
+__all__ = ["RunSettings", "ContactSolverName", "MIN_DT", "MAX_DT", "MAX_STEPS", "MAX_STEP_CUT_FACTOR"]
+
+ContactSolverName = Literal["open-close", "newton"]  # Shi's open-close iteration, or Newton's method
+
+if TYPE_CHECKING:  # the backends' names are a table built at import (srdda.solvers.SOLVERS): a str to mypy
+    SolverName = str
+else:
+    SolverName = Literal[SOLVERS]
 
 # Δt bounds: Shi's coefficients use 4/Δt², finite only for Δt above ~1e-154; a step below a
 # picosecond or above a million seconds is a unit mistake in every rock-mechanics model.
@@ -78,22 +86,23 @@ CONTACT_FIELDS = ("contact_solver", "contact_penalty", "auto_penalty", "shear_ra
 class RunSettings:
     """How to run a model (SI). Give ``n_steps``, ``end_time`` or both (the run stops at the first)."""
 
+    __pydantic_fields__: ClassVar[dict[str, FieldInfo]]  # set by pydantic's dataclass
     dt: Annotated[Seconds, Field(ge=MIN_DT, le=MAX_DT)]
     n_steps: Annotated[int | None, Field(ge=0, le=MAX_STEPS,
                                          validation_alias=AliasChoices("n_steps", "steps"))] = None
     end_time: Annotated[Seconds | None, Field(gt=0)] = None
-    method: Literal[METHODS] = "srdda"
+    method: MethodName = "srdda"
     rho_inf: Annotated[Ratio, Field(ge=0, le=1)] = 1.0
-    scheme: Literal[SCHEMES] | None = None  # override the method's time scheme
+    scheme: SchemeName | None = None  # override the method's time scheme
     linearization: Literal["start", "secant"] | None = None  # override the method's linearisation
     penalty: Annotated[NewtonsPerMetre, Field(gt=0)] = 1e9  # default stiffness of fixed points (N/m)
-    solver: Annotated[Literal[SOLVERS], AfterValidator(_installed)] = "auto"
+    solver: Annotated[SolverName, AfterValidator(_installed)] = "auto"
     # the iterative backends (cg-amg, cg-jacobi; auto above ITERATIVE_LIMIT blocks) stop when every unknown
     # of the increment is estimated within this of the exact solution (m): docs/performance.md
     solver_tolerance: Annotated[Metres, Field(gt=0, le=1.0)] = DEFAULT_TOLERANCE
     # where the conjugate gradient runs: "cpu", "gpu" (CuPy and a CUDA GPU, srdda[gpu]) or "auto" (the GPU for
     # models of GPU_MIN_BLOCKS blocks or more when one is present; docs/performance.md, *On a GPU*)
-    device: Literal[DEVICES] = "auto"
+    device: DeviceName = "auto"
     # The secant pass stops when |Δθ|·|δθ| (δθ: change of the rotation increment between two solves)
     # is below this: the mismatch between the linearised and the exact rotation displacement of a
     # point, per metre of lever arm, is about half of it.
@@ -107,7 +116,7 @@ class RunSettings:
     contacts: bool = True  # detect and resolve block contacts
     # how a step's contact problem is solved: Shi's open-close iteration, or Newton's method with a line search on
     # the step's incremental potential (docs/contacts.md, "The contact solve")
-    contact_solver: Literal["open-close", "newton"] = "open-close"
+    contact_solver: ContactSolverName = "open-close"
     contact_penalty: Annotated[NewtonsPerMetre | None, Field(gt=0)] = None  # k_n (N/m); None: ``penalty``
     auto_penalty: Annotated[Ratio | None, Field(gt=0)] = None  # k_n = this × the largest Young's modulus × 1 m
     shear_ratio: Annotated[Ratio, Field(gt=0)] = 0.4  # k_s / k_n
@@ -129,6 +138,7 @@ class RunSettings:
     @field_validator("*", mode="before")
     @classmethod
     def _no_boolean(cls, value: object, info: ValidationInfo) -> object:
+        assert info.field_name is not None  # a field validator's info names its field
         return reject_boolean(value, cls.__pydantic_fields__[info.field_name].annotation)
 
     @model_validator(mode="after")

@@ -42,7 +42,7 @@ import os
 import warnings
 from collections.abc import Callable
 from dataclasses import replace
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol, TypeAlias
 
 import numpy as np
 import scipy.linalg as sla
@@ -53,6 +53,9 @@ from threadpoolctl import threadpool_limits
 from .assembly.system import BlockSystem
 from .solvers_iterative import (BlockJacobi, IterativeSolverError, PCGResult, SmoothedAggregation, block_jacobi_pcg,
                                 pcg, smallest_eigenvalue_estimate)
+
+if TYPE_CHECKING:
+    import pypardiso  # optional (srdda[pardiso]), imported where used; it ships no stubs
 
 __all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "blas_threads_for_steps", "DENSE_LIMIT",
            "ITERATIVE_LIMIT", "DEFAULT_TOLERANCE", "SOLVERS"]
@@ -81,7 +84,7 @@ def _check(x: np.ndarray) -> np.ndarray:
     return x
 
 
-Matrix = np.ndarray | sp.csr_matrix
+Matrix: TypeAlias = sp.csr_matrix  # what _Factorizing.matrix assembles
 Factor = Callable[[np.ndarray], np.ndarray]
 
 
@@ -258,6 +261,7 @@ class _Analysing:
             self.analyses += 1
             self._last = None
         else:
+            assert pattern is not None  # positions were found in it
             matrix = pattern.csr(bsr, positions)
         if self._last is not None and np.array_equal(self._last[0].data, matrix.data):
             factor = self._last[1]
@@ -303,6 +307,7 @@ class PardisoSolver(_Analysing):
 
     name = "pardiso"
     upper = True
+    _pardiso: pypardiso.PyPardisoSolver  # set by analyse
 
     def analyse(self, matrix: sp.csr_matrix) -> None:
         import pypardiso

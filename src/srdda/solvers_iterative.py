@@ -66,7 +66,7 @@ class PCGResult:
     converged: bool = True  # False: ``max_iterations`` reached first
 
 
-def _smallest_ritz(alphas: list[float], betas: list[float]) -> float:
+def _smallest_ritz(alphas: list[float] | np.ndarray, betas: list[float] | np.ndarray) -> float:
     """The smallest eigenvalue of the Lanczos matrix of a PCG run (Saad §6.7.3).
 
     ``alphas[j]`` are the step lengths, ``betas[j]`` (j ≥ 1) the ratios

@@ -251,8 +251,8 @@ def _base_time(mark: StageMark, arrays: ModelArrays, state: State, value: Any) -
     return replace(mark, base_time=state.time)
 
 
-def _resolve_named(names: list[str], value: Mapping[str, Any], kind: type, what: str, where: str,
-                   first_row: int = 0) -> dict[str, dict[str, Any]]:
+def _resolve_named(names: list[str], value: Mapping[str, Any], kind: type[Material] | type[JointMaterial], what: str,
+                   where: str, first_row: int = 0) -> dict[str, dict[str, Any]]:
     """New properties of named materials (``kind`` Material or JointMaterial) by their row (JSON keys)."""
     out = {}
     for name, properties in value.items():
@@ -260,7 +260,7 @@ def _resolve_named(names: list[str], value: Mapping[str, Any], kind: type, what:
             raise ModelError(f"{where}.{name}: no {what} named {name!r}")
         if not isinstance(properties, kind):
             raise ModelError(f"{where}.{name}: give a srdda.{kind.__name__}")
-        out[str(names.index(name) + first_row)] = dataclasses.asdict(properties)  # type: ignore[call-overload]
+        out[str(names.index(name) + first_row)] = dataclasses.asdict(properties)
     return out
 
 

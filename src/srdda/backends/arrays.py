@@ -15,15 +15,16 @@ import functools
 import importlib.util
 from dataclasses import dataclass
 from types import ModuleType
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 import numpy as np
 import scipy.sparse
 
-__all__ = ["ArrayBackend", "DEVICES", "GPU_MIN_BLOCKS", "GPU_SOLVERS", "GpuUnavailable", "cupy_backend",
+__all__ = ["ArrayBackend", "DEVICES", "DeviceName", "GPU_MIN_BLOCKS", "GPU_SOLVERS", "GpuUnavailable", "cupy_backend",
            "gpu_problem", "numpy_backend", "resolve_device"]
 
-DEVICES = ("cpu", "gpu", "auto")
+DeviceName = Literal["cpu", "gpu", "auto"]
+DEVICES: tuple[DeviceName, ...] = get_args(DeviceName)
 # solvers with a GPU backend: the block-Jacobi conjugate gradient, and ``auto``, whose large systems use it
 GPU_SOLVERS = ("auto", "cg-jacobi")
 # ``device = "auto"`` takes the GPU for models of at least this many blocks (provisional: the GPU's

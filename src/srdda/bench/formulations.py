@@ -94,6 +94,7 @@ def held_tresca_step(arrays: ModelArrays, run: RunSettings, normal_star: Callabl
         begin(ctx)
         last["detection"] = time.perf_counter() - start
 
+    # the instance's methods wrapped for the timing (mypy refuses assigning to a method)
     contact.converged = capture  # type: ignore[method-assign]
     contact.begin = timed_begin  # type: ignore[method-assign]
     start = time.perf_counter()

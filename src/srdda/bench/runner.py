@@ -54,9 +54,11 @@ import numpy as np
 
 from .. import simulation
 from ..assembly.system import BlockSystem
+from ..backends.arrays import DeviceName
 from ..contact.pipeline import ContactModel, ContactStep
+from ..integrators.methods import MethodName
 from ..model import Model
-from ..settings import RunSettings
+from ..settings import ContactSolverName, RunSettings
 from ..step import Stepper
 from ..solvers import DEFAULT_TOLERANCE
 from ..term import CUT_CAUSES
@@ -239,7 +241,7 @@ def peak_memory_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
 
 
-def _warm_up(dim: int, device: str) -> None:
+def _warm_up(dim: int, device: DeviceName) -> None:
     """Compile the numba kernels (contact detection) on a tiny wall of the model's dimension, outside the timing;
     on a GPU also CuPy's kernels, through its conjugate gradient."""
     model, settings = brick_wall(2, 2) if dim == 2 else english_bond_wall(1, 2)
@@ -247,8 +249,8 @@ def _warm_up(dim: int, device: str) -> None:
                                   solver="cg-jacobi" if device == "gpu" else settings.solver))
 
 
-def measure(case: BenchCase, steps: int, method: str, dt: float | None, timeout: float,
-            contact_solver: str | None = None, device: str = "cpu") -> dict[str, Any]:
+def measure(case: BenchCase, steps: int, method: MethodName, dt: float | None, timeout: float,
+            contact_solver: ContactSolverName | None = None, device: DeviceName = "cpu") -> dict[str, Any]:
     """Build and run one model in this process, its solves on ``device``; the row of ``srdda bench --json``
     (``contact_solver`` None: the model's own)."""
     start = time.perf_counter()

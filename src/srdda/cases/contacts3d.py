@@ -11,10 +11,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..geometry.polyhedron import box
+from ..integrators.methods import MethodName
 from ..kinematics.shape3d import rotation_matrix_3d
 from ..model import JointMaterial, Material, Model
 from ..results import Result
@@ -57,7 +59,7 @@ class InclineRun:
     solves_per_step: float
 
 
-def incline_case(psi: float, phi: float, method: str, settle: float = 0.5, duration: float = 1.0,
+def incline_case(psi: float, phi: float, method: MethodName, settle: float = 0.5, duration: float = 1.0,
                  dt: float = 1e-3) -> InclineRun:
     """Run the incline for ``settle`` + ``duration`` s and measure after ``settle`` (the contacts' first bounce)."""
     model, dip = incline_model(psi, phi)
@@ -91,8 +93,8 @@ def drop_model(rotation: tuple[float, float, float], height: float = 0.2, veloci
     return m
 
 
-def drop_case(rotation: tuple[float, float, float], method: str, steps: int = 600, dt: float = 1e-3,
-              penalty: float = 1e11, **kw: object) -> tuple[float, float]:
+def drop_case(rotation: tuple[float, float, float], method: MethodName, steps: int = 600, dt: float = 1e-3,
+              penalty: float = 1e11, **kw: Any) -> tuple[float, float]:
     """The largest rise of the energy balance over the run, relative to the cube's energy, and the dissipation.
 
     Balance = kinetic + gravitational + strain + contact springs + friction
@@ -100,7 +102,7 @@ def drop_case(rotation: tuple[float, float, float], method: str, steps: int = 60
     the base's top: its initial kinetic energy plus m g (height of its
     centroid). Returns (largest rise / scale, friction dissipated / scale).
     """
-    model = drop_model(rotation, **kw)  # type: ignore[arg-type]
+    model = drop_model(rotation, **kw)
     res = _completed(run(model, RunSettings(dt=dt, n_steps=steps, method=method, penalty=penalty)),
                      f"drop-3d {rotation} {method}")
     names = list(res.energy[0])

@@ -14,12 +14,12 @@ after over before, e_n for an ideal impact law, whatever Δt.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
+from ..integrators.methods import MethodName
 from ..model import JointMaterial, Material, Model
-from ..settings import RunSettings
+from ..settings import ContactSolverName, RunSettings
 from ..simulation import run
 
 __all__ = ["impact_model", "ImpactRun", "impact_case", "IMPACT_PENALTY"]
@@ -61,8 +61,8 @@ class ImpactRun:
 
 
 def impact_case(dim: int, on_base: bool, dt: float, restitution: float | None = None,
-                penalty: float = IMPACT_PENALTY, method: str = "srdda",
-                contact_solver: Literal["open-close", "newton"] = "open-close") -> ImpactRun:
+                penalty: float = IMPACT_PENALTY, method: MethodName = "srdda",
+                contact_solver: ContactSolverName = "open-close") -> ImpactRun:
     """Run the impact for :data:`DURATION` at ``dt`` and measure it (the blocks have parted by then)."""
     settings = RunSettings(dt=dt, n_steps=int(round(DURATION / dt)), method=method, contact_penalty=penalty,
                            contact_solver=contact_solver)

@@ -11,6 +11,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..geometry.polyhedron import box, prism
+from ..integrators.methods import MethodName
 from ..io.modelfile import load_model
 from ..kinematics.shape3d import rotation_matrix_3d, skew
 from ..model import Material, Model
@@ -41,7 +42,7 @@ def _inertia(model: Model) -> tuple[np.ndarray, np.ndarray, float]:
     return inertia, mom.centroid[0], float(arrays.block_mass[0])
 
 
-def spin_case(method: str, steps: int = 10_000, dt: float = 1e-3, omega: float = 3.0) -> list[Measured]:
+def spin_case(method: MethodName, steps: int = 10_000, dt: float = 1e-3, omega: float = 3.0) -> list[Measured]:
     """A box spinning about its principal z axis in free flight: ω and volume kept; dda0's volume grows.
 
     dda0's linear update maps the block by I + Δθ·[e_z]× each step, whose
@@ -52,6 +53,7 @@ def spin_case(method: str, steps: int = 10_000, dt: float = 1e-3, omega: float =
     model.add_polyhedron(*box((0, 0, 0), (1.0, 0.5, 0.2)), "rock", angular_velocity=(0.0, 0.0, omega))
     result = run(model, RunSettings(dt=dt, n_steps=steps, method=method), keep_history=False)
     state = result.final_state
+    assert state is not None  # run() leaves its final state
     volume0 = model.arrays().moments(model.arrays().vertex_position).volume[0]
     growth = (1.0 + (omega * dt) ** 2) ** steps if method == "dda0" else 1.0
     return [Measured("omega_z", method, float(state.velocity[0, 5]), omega),
@@ -68,7 +70,7 @@ def _zero_crossings(t: np.ndarray, x: np.ndarray) -> np.ndarray:
     return t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i])
 
 
-def intermediate_axis_case(method: str, flips: int = 10, dt: float = 1e-3, spin: float = 20.0,
+def intermediate_axis_case(method: MethodName, flips: int = 10, dt: float = 1e-3, spin: float = 20.0,
                            wobble: float = 1.0) -> list[Measured]:
     """The tennis-racket flip of a concave T prism spun near its intermediate axis, against Euler's equations.
 
@@ -130,7 +132,7 @@ def _euler_half_period(inertia: np.ndarray, omega0: np.ndarray, middle: np.ndarr
         horizon *= 2.0
 
 
-def extruded_case(example: str, method: str, steps: int = 2000, young: float | None = None,
+def extruded_case(example: str, method: MethodName, steps: int = 2000, young: float | None = None,
                   penalty: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """ω histories of a paper example (``rod`` or ``pendulum``) in 2D and as 1 m prisms in 3D.
 
@@ -149,7 +151,7 @@ def extruded_case(example: str, method: str, steps: int = 2000, young: float | N
     return flat, solid, other
 
 
-def conical_pendulum_case(method: str, periods: float = 2.0, dt: float = 2.5e-4, tilt: float = 0.5
+def conical_pendulum_case(method: MethodName, periods: float = 2.0, dt: float = 2.5e-4, tilt: float = 0.5
                           ) -> list[Measured]:
     """A 0.2 × 0.2 × 1 m box hung from the ground by a ball hinge (pin) at its top, on a steady conical orbit.
 
@@ -197,7 +199,7 @@ def conical_pendulum_case(method: str, periods: float = 2.0, dt: float = 2.5e-4,
             Measured("centroid height (m)", method, float(np.mean(centroid[:, 2])), float(np.mean(ref[:, 2])))]
 
 
-def uniaxial_case(method: str = "srdda", stress: float = 100.0, young: float = 1e9, poisson: float = 0.25,
+def uniaxial_case(method: MethodName = "srdda", stress: float = 100.0, young: float = 1e9, poisson: float = 0.25,
                   steps: int = 200) -> list[Measured]:
     """A free box pulled by equal and opposite uniform tractions on its x faces, settled with ρ∞ = 0.
 
@@ -217,6 +219,7 @@ def uniaxial_case(method: str = "srdda", stress: float = 100.0, young: float = 1
             model.add_point_load((0.0, y, z), (-force, 0.0, 0.0), block=0)
     result = run(model, RunSettings(dt=1e-3, n_steps=steps, method=method, rho_inf=0.0), keep_history=False)
     state = result.final_state
+    assert state is not None  # run() leaves its final state
     strain = np.ptp(state.vertices, axis=0) / size - 1.0
     drift = float(np.linalg.norm(state.moments.centroid[0] - size / 2))
     return [Measured("axial strain", method, float(strain[0]), stress / young),

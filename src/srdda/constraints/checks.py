@@ -56,10 +56,10 @@ def _multiplier_constraints(arrays: ModelArrays) -> list[tuple[str, dict[int, np
     if len(driven):
         rows = links.prescribed_rows[driven]
         t = _shape_rows(arrays, rows)
-        for k, i in enumerate(driven):
+        for k, j in enumerate(driven):
             point = tuple(float(c) for c in arrays.attached.point_position[rows[k]])
             block = int(arrays.attached.point_block[rows[k]])
-            out.append((f"the point driven at {point}", {block: t[k][links.prescribed_mask[i]]}))
+            out.append((f"the point driven at {point}", {block: t[k][links.prescribed_mask[j]]}))
     return out
 
 

@@ -7,6 +7,7 @@ indexes those rows. Units SI.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -99,6 +100,11 @@ def _rows() -> np.ndarray:
     return np.zeros(0, dtype=np.int64)
 
 
+def _no_points() -> np.ndarray:
+    """Default of a per-point (n, dim) array: ``__post_init__`` puts (0, dim) zeros of its dtype in its place."""
+    return np.zeros((0, 0))
+
+
 @dataclass(frozen=True)
 class ConstraintArrays:
     """Flat arrays of the hinges, springs with dashpots, driven points and bolts.
@@ -123,10 +129,10 @@ class ConstraintArrays:
     spring_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
     spring_damping: np.ndarray = field(default_factory=lambda: np.zeros(0))
     spring_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))  # axial rest length
-    spring_offset: np.ndarray | None = None  # (n, dim) offset kind: r0
+    spring_offset: np.ndarray = field(default_factory=_no_points)  # (n, dim) offset kind: r0
     spring_axial: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     prescribed_rows: np.ndarray = field(default_factory=_rows)
-    prescribed_mask: np.ndarray | None = None  # (n, dim) prescribed components
+    prescribed_mask: np.ndarray = field(default_factory=_no_points)  # (n, dim) prescribed components
     prescribed_order: np.ndarray = field(default_factory=_rows)  # 0 displacement, 1 velocity, 2 acceleration
     prescribed_multiplier: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     prescribed_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))  # nan = run's penalty
@@ -136,8 +142,8 @@ class ConstraintArrays:
     base_acceleration: MotionHistory | None = None
     bolt_rows_a: np.ndarray = field(default_factory=_rows)
     bolt_rows_b: np.ndarray = field(default_factory=_rows)  # -1: end b on the ground (at bolt_ground)
-    bolt_ground: np.ndarray | None = None  # (n, dim) where end b is when it is on the ground
-    bolt_axis: np.ndarray | None = None  # (n, dim) initial separation x_a - x_b
+    bolt_ground: np.ndarray = field(default_factory=_no_points)  # (n, dim) where end b is when it is on the ground
+    bolt_axis: np.ndarray = field(default_factory=_no_points)  # (n, dim) initial separation x_a - x_b
     bolt_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
     bolt_pretension: np.ndarray = field(default_factory=lambda: np.zeros(0))
     bolt_strength: np.ndarray = field(default_factory=lambda: np.zeros(0))  # inf: never breaks
@@ -148,7 +154,7 @@ class ConstraintArrays:
     def __post_init__(self) -> None:
         for name, dtype in (("spring_offset", float), ("prescribed_mask", bool), ("bolt_ground", float),
                             ("bolt_axis", float)):
-            if getattr(self, name) is None:
+            if getattr(self, name) is None or getattr(self, name).shape == (0, 0):
                 object.__setattr__(self, name, np.zeros((0, self.dim), dtype=dtype))
 
     @property
@@ -184,7 +190,7 @@ class ConstraintArrays:
 
 
 def compile_links(hinges: list[HingeSpec], springs: list[SpringSpec], prescribed: list[PrescribedSpec],
-                  base_acceleration: MotionHistory | None, first_row: int, dim: int, bolts: list[BoltSpec] = ()
+                  base_acceleration: MotionHistory | None, first_row: int, dim: int, bolts: Sequence[BoltSpec] = ()
                   ) -> tuple[np.ndarray, np.ndarray, ConstraintArrays]:
     """Points (n, dim), their blocks (n,) and the arrays of all links; point rows start at ``first_row``."""
     pts: list[np.ndarray] = []

@@ -92,6 +92,7 @@ class BaseAccelerationTerm(Term):
     same_every_solve = True
 
     def __init__(self, links: ConstraintArrays) -> None:
+        assert links.base_acceleration is not None  # the term of a model with a base acceleration
         self.history = links.base_acceleration
 
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:

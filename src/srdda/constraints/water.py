@@ -128,7 +128,7 @@ class WaterTable:
                           tuple(TensionCrack(pad(c.point), pad(c.normal), c.depth) for c in self.cracks))
 
 
-def water_table(gravity: Sequence[float], level: float | None = None, point: Sequence[float] | None = None,
+def water_table(gravity: Sequence[float] | np.ndarray, level: float | None = None, point: Sequence[float] | None = None,
                 normal: Sequence[float] | None = None, unit_weight: float = UNIT_WEIGHT,
                 cracks: Sequence[tuple[Sequence[float], Sequence[float], float]] = ()) -> WaterTable:
     """A validated :class:`WaterTable`: a horizontal ``level`` (elevation against gravity, m) or a plane

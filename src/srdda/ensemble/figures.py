@@ -74,7 +74,7 @@ def _envelopes(spec: EnsembleSpec, collectors: pa.Table, dim: int) -> plt.Figure
     for ax, quantity, label in ((axes[0], "kinetic", f"kinetic energy ({energy_unit})"),
                                 (axes[1], "bounce_height", "bounce height (m)")):
         values = collectors.column(quantity).to_numpy()
-        curves = {"P50": [], "P95": [], "max": []}
+        curves: dict[str, list[float]] = {"P50": [], "P95": [], "max": []}
         for c in placed:
             v = values[(names == c.name) & crossed]
             v = v[np.isfinite(v)]

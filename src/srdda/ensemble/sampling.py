@@ -183,8 +183,10 @@ def apply_values(base: dict[str, Any], spec: EnsembleSpec, values: dict[str, flo
                 ref = p.block if p.block is not None else tracked_block(data, spec)
                 _apply_block_shortcut(data, _block_index(data["blocks"], ref, "block"), p.shortcut, value)
             elif p.shortcut == "density":
+                assert p.material is not None  # Parameter's check: density names its material
                 _child(data.get("materials", {}), p.material, "material")["density"] = value
             elif p.shortcut == "friction":
+                assert p.joint is not None  # Parameter's check: friction names its joint material
                 _child(data.get("joint_materials", {}), p.joint, "joint")["friction_angle"] = value
             elif p.shortcut == "stiffness":
                 data["run"]["contact_penalty"] = value

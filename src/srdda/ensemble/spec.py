@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import tomllib
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -24,10 +24,12 @@ class SpecError(ValueError):
 
 
 # Named shortcuts: what each one sets and which reference it needs (docs/ensembles.md).
-BLOCK_SHORTCUTS = ("release_dx", "release_dy", "release_dz", "velocity_x", "velocity_y", "velocity_z",
-                   "angular_velocity", "angular_velocity_x", "angular_velocity_y", "angular_velocity_z",
-                   "scale", "aspect")
-SHORTCUTS = (*BLOCK_SHORTCUTS, "density", "friction", "stiffness")
+BlockShortcut = Literal["release_dx", "release_dy", "release_dz", "velocity_x", "velocity_y", "velocity_z",
+                        "angular_velocity", "angular_velocity_x", "angular_velocity_y", "angular_velocity_z",
+                        "scale", "aspect"]
+Shortcut = Literal[BlockShortcut, "density", "friction", "stiffness"]
+BLOCK_SHORTCUTS: tuple[BlockShortcut, ...] = get_args(BlockShortcut)
+SHORTCUTS: tuple[Shortcut, ...] = (*BLOCK_SHORTCUTS, "density", "friction", "stiffness")
 
 
 class _Strict(BaseModel):
@@ -39,7 +41,7 @@ class _Parameter(_Strict):
 
     name: str = Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")
     path: str | None = None  # a model-file field, e.g. "blocks.stone.velocity[0]" or "run.contact_penalty"
-    shortcut: Literal[SHORTCUTS] | None = None
+    shortcut: Shortcut | None = None
     block: str | int | None = None  # block shortcuts: the block (default: the spec's tracked block)
     material: str | None = None  # "density": the material
     joint: str | None = None  # "friction": the joint material

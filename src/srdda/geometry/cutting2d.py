@@ -365,7 +365,7 @@ def cut_blocks(
     opening_type: int | None = None,
     hole_points: object = (),
     material_lines: object = (),
-    material_line_types: Sequence[int] = (),
+    material_line_types: Sequence[int] | np.ndarray = (),
     material_points: object = (),
     material_point_types: Sequence[int] = (),
     default_material: int = 0,
@@ -554,7 +554,7 @@ def _remove_collinear(vertices: np.ndarray, block_ptr: np.ndarray, edge_joint: n
     return vertices[keep], new_ptr, edge_joint[keep]
 
 
-def _materials(polygons: np.ndarray, default: int, lines: object, line_types: Sequence[int],
+def _materials(polygons: np.ndarray, default: int, lines: object, line_types: Sequence[int] | np.ndarray,
                points: object, point_types: Sequence[int]) -> np.ndarray:
     """Block material labels: default, then material lines (later win), then material points."""
     material = np.full(len(polygons), default, dtype=np.int64)

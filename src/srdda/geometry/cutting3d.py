@@ -503,10 +503,10 @@ def _ring_arrays(faces: Sequence[np.ndarray], labels: np.ndarray) -> tuple[np.nd
     return np.concatenate(faces).astype(np.int64), _offsets([len(f) for f in faces]), labels.astype(np.int64)
 
 
-def _convex_part(part: object, label: str, tol: float) -> tuple[np.ndarray, list[np.ndarray]]:
+def _convex_part(part: tuple[object, object], label: str, tol: float) -> tuple[np.ndarray, list[np.ndarray]]:
     """A validated convex polyhedron (vertices, outward faces) from (vertices, faces)."""
     try:
-        vertices, faces = part  # type: ignore[misc]
+        vertices, faces = part
         v, outward = normalize_polyhedron(vertices, faces, label)
     except (TypeError, ValueError) as exc:
         raise CuttingError(f"domain {label}: {exc}" if not isinstance(exc, PolyhedronError) else str(exc)) from None
@@ -541,7 +541,8 @@ def convex_hull_polyhedron(points: object, label: str = "domain") -> tuple[np.nd
     return halfspace_polyhedron(hull.equations[:, :3], -hull.equations[:, 3], lo - margin, hi + margin, label)
 
 
-def halfspace_polyhedron(normals: object, offsets: object, lo: Sequence[float], hi: Sequence[float],
+def halfspace_polyhedron(normals: object, offsets: object, lo: Sequence[float] | np.ndarray,
+                         hi: Sequence[float] | np.ndarray,
                          label: str = "polyhedron") -> tuple[np.ndarray, list[np.ndarray]]:
     """The convex polyhedron {x in [lo, hi] : normals[k]·x <= offsets[k] for every k}: (vertices, outward faces).
 

@@ -35,6 +35,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .cutting2d import CuttingError
 
@@ -65,7 +66,7 @@ def _orthonormal_frame(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return e1, np.cross(axis, e1)
 
 
-def fisher_directions(mean: Sequence[float], kappa: float, n: int, rng: np.random.Generator) -> np.ndarray:
+def fisher_directions(mean: ArrayLike, kappa: float, n: int, rng: np.random.Generator) -> np.ndarray:
     """``n`` unit vectors (n, 3) from Fisher's distribution about ``mean`` with concentration ``kappa`` > 0.
 
     Exact inversion of the distribution of the angle θ to the mean (Fisher,
@@ -97,7 +98,8 @@ class JointPlanes:
     joint_type: np.ndarray
 
     @classmethod
-    def of(cls, normal: object, point: object, radius: object = np.inf, joint_type: object = 1) -> JointPlanes:
+    def of(cls, normal: ArrayLike, point: ArrayLike, radius: ArrayLike = np.inf,
+           joint_type: ArrayLike = 1) -> JointPlanes:
         """Validated joints; ``radius`` and ``joint_type`` may be one value for all."""
         n = np.asarray(normal, dtype=float).reshape(-1, 3) if np.size(normal) else np.zeros((0, 3))
         p = np.asarray(point, dtype=float).reshape(-1, 3) if np.size(point) else np.zeros((0, 3))
@@ -186,6 +188,7 @@ def _set_joints(points: np.ndarray, js: JointSet3D, rng: np.random.Generator) ->
     if js.persistence == 1.0:
         normals = np.tile(n, (len(base), 1)) if js.kappa is None else fisher_directions(n, js.kappa, len(base), rng)
         return JointPlanes.of(normals, base, np.inf, js.joint_type)
+    assert js.radius is not None  # JointSet3D's check: persistence < 1 comes with a radius
     r = float(js.radius)
     e1, e2 = _orthonormal_frame(n)
     uv = np.column_stack([(points - o) @ e1, (points - o) @ e2])

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from numpy.typing import ArrayLike
 
 __all__ = [
     "BlockMoments",
@@ -123,7 +124,7 @@ def block_moments(vertices: np.ndarray, block_ptr: np.ndarray, owner: np.ndarray
     )
 
 
-def normalize_polygon(vertices: np.ndarray, name: str = "polygon") -> np.ndarray:
+def normalize_polygon(vertices: ArrayLike, name: str = "polygon") -> np.ndarray:
     """Validate a block polygon and return it counter-clockwise, unclosed.
 
     Rejects (with :class:`PolygonError` naming ``name``) fewer than three

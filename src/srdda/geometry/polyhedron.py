@@ -29,13 +29,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
+from numpy.typing import ArrayLike
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from .polygon import PolygonError, normalize_polygon
+
+if TYPE_CHECKING:
+    import meshio  # the mesh type of polyhedra_from_meshio (meshio ships no stubs)
 
 __all__ = [
     "polyhedron_covers",
@@ -473,7 +478,7 @@ _I, _J = np.triu_indices(3)  # the six distinct entries of a symmetric 3x3 tenso
 _BOX_FACES = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
 
 
-def box(lo: Sequence[float], hi: Sequence[float], label: str = "box") -> Block3D:
+def box(lo: Sequence[float] | np.ndarray, hi: Sequence[float] | np.ndarray, label: str = "box") -> Block3D:
     """The axis-aligned box [lo, hi]: 8 vertices, 6 outward quadrilateral faces."""
     lo_a, hi_a = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     if lo_a.shape != (3,) or hi_a.shape != (3,):
@@ -486,7 +491,7 @@ def box(lo: Sequence[float], hi: Sequence[float], label: str = "box") -> Block3D
     return v, [np.array(f) for f in _BOX_FACES]
 
 
-def prism(polygon_2d: object, z0: float, z1: float, label: str = "prism") -> Block3D:
+def prism(polygon_2d: ArrayLike, z0: float, z1: float, label: str = "prism") -> Block3D:
     """Extrusion of a simple 2D polygon (concave allowed) from z0 to z1.
 
     Bottom and top are one polygon face each, the sides quadrilaterals.
@@ -509,7 +514,7 @@ def prism(polygon_2d: object, z0: float, z1: float, label: str = "prism") -> Blo
 _SURFACE_CELLS = ("triangle", "quad", "polygon")
 
 
-def polyhedra_from_meshio(mesh: object, label: str = "mesh") -> list[Block3D]:
+def polyhedra_from_meshio(mesh: meshio.Mesh, label: str = "mesh") -> list[Block3D]:
     """One block per connected closed surface of a meshio surface mesh (triangles, quads, polygons).
 
     Surfaces are connected through shared point indices (meshio's STL reader

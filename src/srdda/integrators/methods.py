@@ -19,12 +19,14 @@ torque -ω × Jω, docs/theory-3d.md); dda0 and dda1 keep Shi's inertia.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Literal, get_args
 
 from .schemes import TimeScheme
 
-__all__ = ["Method", "METHODS", "method_preset"]
+__all__ = ["Method", "METHODS", "MethodName", "method_preset"]
 
-METHODS = ("dda0", "dda1", "srdda")
+MethodName = Literal["dda0", "dda1", "srdda"]
+METHODS: tuple[MethodName, ...] = get_args(MethodName)
 
 
 @dataclass(frozen=True)

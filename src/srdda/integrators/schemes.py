@@ -22,10 +22,12 @@ t + Δt follow from Δd.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, get_args
 
-__all__ = ["SchemeCoefficients", "TimeScheme", "alpha_parameters", "SCHEMES"]
+__all__ = ["SchemeCoefficients", "SchemeName", "TimeScheme", "alpha_parameters", "SCHEMES"]
 
-SCHEMES = ("shi", "paper", "chung-hulbert")
+SchemeName = Literal["shi", "paper", "chung-hulbert"]
+SCHEMES: tuple[SchemeName, ...] = get_args(SchemeName)
 
 
 def alpha_parameters(rho_inf: float) -> tuple[float, float, float, float]:

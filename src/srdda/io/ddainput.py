@@ -21,7 +21,7 @@ import numpy as np
 import shapely
 
 from ..geometry.cutting2d import NO_JOINT, BlockCut, CuttingError, cut_blocks
-from ..model import JointMaterial, Material, Model, ModelError
+from ..model import JointMaterial, Material, Model, ModelError, PlaneKind
 from ..settings import RunSettings
 from ..units import UNIT_SYSTEMS, UnitSystem, detect_unit_system
 
@@ -165,7 +165,8 @@ class DDAInput:
         def material(m: BlockMaterialSpec) -> BlockMaterialSpec:
             return dataclasses.replace(
                 m, unit_mass=m.unit_mass * u.density, unit_weight=m.unit_weight * u.unit_weight,
-                young=m.young * u.pressure, stress=tuple(v * u.pressure for v in m.stress),
+                young=m.young * u.pressure,
+                stress=(m.stress[0] * u.pressure, m.stress[1] * u.pressure, m.stress[2] * u.pressure),
                 velocity=(m.velocity[0] * u.velocity, m.velocity[1] * u.velocity, m.velocity[2] / u.time))
 
         return dataclasses.replace(
@@ -302,7 +303,7 @@ class DDAInput:
         """The srdda Model: blocks, materials, joint materials, fixed/load/measured points, gravity."""
         cut = self.cut() if cut is None else cut
         model = Model(gravity=(0.0, -self.gravity()))
-        plane = "strain" if self.plane_strain else "stress"
+        plane: PlaneKind = "strain" if self.plane_strain else "stress"
         used = np.unique(cut.block_material)
         for k in used:
             if not 1 <= k <= len(self.block_materials):

@@ -112,4 +112,4 @@ def _read_analysis(path: Path, data: DDAInput) -> None:
     data.block_materials = [BlockMaterialSpec(unit_mass=p[0], unit_weight=p[1], young=p[2], poisson=p[3],
                                               stress=tuple(p[4:7]), strain=tuple(p[7:10]),
                                               velocity=tuple(p[10:13])) for p in props]
-    data.joint_materials = [tuple(map(float, j)) for j in jprops]
+    data.joint_materials = [(float(j[0]), float(j[1]), float(j[2])) for j in jprops]

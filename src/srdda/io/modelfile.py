@@ -10,6 +10,7 @@ import dataclasses
 import math
 import tomllib
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -183,6 +184,7 @@ def _add_block(model: Model, b: BlockSection, label: str) -> None:
     if (b.vertices is None) == (b.box is None) or (b.box is not None and b.faces is not None):
         raise ModelError("give 'vertices' (with 'faces' for a polyhedron) or 'box', exactly one")
     if not solid:
+        assert b.vertices is not None  # no box: vertices (checked above)
         if b.edge_joints is not None and len(b.edge_joints) == 0:
             raise ModelError("edge_joints is empty")
         joints = None if b.edge_joints is None else [j or None for j in b.edge_joints]
@@ -194,7 +196,13 @@ def _add_block(model: Model, b: BlockSection, label: str) -> None:
         return
     if b.edge_joints is not None:
         raise ModelError("edge_joints are for polygons (2D)")
-    vertices, faces = box(*b.box, label) if b.box is not None else (b.vertices, b.faces)
+    vertices: Sequence[Sequence[float]] | np.ndarray
+    faces: Sequence[Sequence[int] | np.ndarray]
+    if b.box is not None:
+        vertices, faces = box(*b.box, label)
+    else:
+        assert b.vertices is not None and b.faces is not None  # a polyhedron without a box (checked above)
+        vertices, faces = b.vertices, b.faces
     omega = b.angular_velocity if isinstance(b.angular_velocity, tuple) else (0.0, 0.0, b.angular_velocity)
     stress = b.stress if len(b.stress) == 6 else (b.stress[0], b.stress[1], 0.0, 0.0, 0.0, b.stress[2])
     model.add_polyhedron(vertices, faces, b.material, b.velocity or (0.0, 0.0, 0.0), omega, stress, label, b.fixed)
@@ -202,7 +210,7 @@ def _add_block(model: Model, b: BlockSection, label: str) -> None:
 
 def cut_section(c: CuttingSection) -> PolyhedralCut:
     """The 3D cut a ``[cutting]`` section describes: its convex domain parts cut by its joint sets and joints."""
-    parts = []
+    parts: list[tuple[object, object]] = []
     for k, d in enumerate(c.domain):
         where = f"domain[{k}]"
         if (d.box is None) == (d.vertices is None) or (d.faces is not None and d.vertices is None):
@@ -320,6 +328,7 @@ def _history_dict(h: MotionHistory, what: str) -> dict[str, Any]:
         return {"table": np.asarray(h.table).tolist()}
     if h.amplitude is not None:
         return {"amplitude": list(h.amplitude), "period": h.period, "phase": h.phase}
+    assert h.constant is not None  # a history is exactly one form
     return {"constant": list(h.constant)}
 
 
@@ -444,8 +453,11 @@ def model_to_dict(model: Model, settings: RunSettings, title: str = "") -> dict[
         entry = {"at": _pt(p), "block": i}
         if ld.table is not None:
             entry["table"] = ld.table.tolist()
-        else:
+        elif ld.constant is not None:
             entry["force"] = list(ld.constant)
+        else:  # a sine: a model file's point load is a force or a table
+            raise ModelFileError(f"point load at {_pt(p)} is a sine history, which a model file cannot hold "
+                                 "(give a force or a table)")
         loads.append(entry)
     if loads:
         out["point_loads"] = loads

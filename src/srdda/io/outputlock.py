@@ -46,7 +46,7 @@ except ImportError:  # Windows
     def _try_lock(fh: IO[str]) -> bool:
         fh.seek(0)  # every run locks the same (first) byte
         try:
-            msvcrt.locking(fh.fileno(), msvcrt.LK_NBLCK, 1)
+            msvcrt.locking(fh.fileno(), msvcrt.LK_NBLCK, 1)  # type: ignore[attr-defined]  # typeshed: Windows only
         except OSError:
             return False
         return True

@@ -350,7 +350,7 @@ def _contacts(c: h5py.Group, keep: bool) -> tuple[dict[str, np.ndarray], int, li
     for k in c:
         rows = read_intact(c, k, keep=keep or k in ("step", "offsets"))
         data[k], good[k], lost[k] = rows.data, rows.good, rows.problem
-    problems += [lost[k] for k in ("step", "offsets") if lost[k] is not None]
+    problems += [p for p in (lost["step"], lost["offsets"]) if p is not None]
     k, out_of_order = ordered_prefix(data["step"][:min(good["step"], max(good["offsets"] - 1, 0))])
     if out_of_order:
         problems.append(f"/contacts/step out of order at record {k}")
@@ -359,12 +359,12 @@ def _contacts(c: h5py.Group, keep: bool) -> tuple[dict[str, np.ndarray], int, li
     if out_of_order or (len(offsets) and offsets[0] != 0):
         problems.append(f"/contacts/offsets out of order at record {ordered if offsets[0] == 0 else 0}")
     k = min(k, ordered - 1) if len(offsets) and offsets[0] == 0 else 0
-    rows = [r for r in c if r not in ("step", "offsets")]
-    fit = min((good[r] for r in rows), default=np.iinfo(np.int64).max)
+    columns = [r for r in c if r not in ("step", "offsets")]
+    fit = min((good[r] for r in columns), default=np.iinfo(np.int64).max)
     records = int(np.searchsorted(data["offsets"][:k + 1], fit, side="right")) - 1 if k > 0 else 0
     if records < k:
         problems += [lost[r] or f"/contacts/{r} holds {good[r]} rows, the records need {int(data['offsets'][k])}"
-                     for r in rows if good[r] < data["offsets"][k]]
+                     for r in columns if good[r] < data["offsets"][k]]
         k = records
     return data, 0 if _missing(c) else max(k, 0), problems
 
@@ -396,7 +396,7 @@ def inspect_results(f: h5py.File, path: str | Path, names: Sequence[str] | None 
     except READ_ERRORS as exc:  # its list of datasets is lost
         data, n, found = {}, 0, [f"/history cannot be read ({_what(exc)})"]
     problems += found
-    energy_names = ENERGY_NAMES
+    energy_names: tuple[str, ...] = ENERGY_NAMES
     if "energy" in data:
         try:
             energy_names = tuple(str(n_) for n_ in read_json(f["history"]["energy"], "names", list))

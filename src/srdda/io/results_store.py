@@ -263,7 +263,7 @@ class ResultsStore:
     :class:`ResultsWriteError` and leaves the file resumable.
     """
 
-    path: str | Path
+    path: Path  # a str is taken too: __post_init__ makes it a Path
     settings: RunSettings
     flush_every: int = 100
     model_text: str | None = None
@@ -379,6 +379,7 @@ class ResultsStore:
 
     def _set_status_and_close(self, status: str) -> None:
         f = self._file
+        assert f is not None  # called with the file open
         self._file = None
         write_text(f, "status", status)
         f.close()
@@ -393,7 +394,8 @@ class ResultsStore:
         """
         failures: list[BaseException] = []
         hook, stderr = sys.unraisablehook, sys.stderr
-        sys.unraisablehook = lambda unraisable: failures.append(unraisable.exc_value)
+        sys.unraisablehook = lambda unraisable: failures.append(unraisable.exc_value
+                                                                or RuntimeError(unraisable.err_msg))
         sys.stderr = captured = io.StringIO()
         self._writing = touches_file
         try:
@@ -471,6 +473,7 @@ class ResultsStore:
         flushed steps, and a checkpoint only once every step up to it is on disk.
         """
         f = self._file
+        assert f is not None  # flush returns without a file
         hist, c, cp = f["history"], f["contacts"], f["checkpoint"]
         n_cp = checkpoint_count(cp)
         new_checkpoint = self._state is not None and (n_cp == 0 or cp["step"][n_cp - 1] != self._state.step)
@@ -511,7 +514,8 @@ class ResultsStore:
         self._guarded(data, steps, checkpoint)
 
     def _record_contacts(self, arrays: ModelArrays, state: State) -> None:
-        given = self.contact_provider(arrays, state)  # type: ignore[misc]
+        assert self.contact_provider is not None  # record calls this only with a provider
+        given = self.contact_provider(arrays, state)
         if given is None:
             return
         data = {k: np.asarray(v) for k, v in given.items()}
@@ -572,6 +576,7 @@ class ResultsStore:
     def _copy_intact(self, point: ResumePoint, state: State) -> None:
         """Write the intact rows of a damaged file (``point.copy``) and the checkpoint to continue from."""
         copy = point.copy
+        assert copy is not None  # a damaged file's point (_open cuts a sound one back in place)
         history = {name: rows[:point.history_rows] for name, rows in copy.histories.items()}
         contacts, steps, counts = {}, [], []
         if point.contact_records:

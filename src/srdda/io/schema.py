@@ -49,6 +49,7 @@ class _Strict(BaseModel):
     @field_validator("*", mode="before")
     @classmethod
     def _no_boolean(cls, value: object, info: ValidationInfo) -> object:
+        assert info.field_name is not None  # a field validator's info names its field
         return reject_boolean(value, cls.model_fields[info.field_name].annotation)
 
 

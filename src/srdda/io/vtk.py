@@ -71,7 +71,8 @@ def blocks_mesh(vertices: np.ndarray, block_ptr: np.ndarray, velocity: np.ndarra
 def _grouped_mesh(points: np.ndarray, counts: np.ndarray, per_block: dict[str, np.ndarray],
                   cell_block: Callable[[int, np.ndarray], tuple[str, object]]) -> meshio.Mesh:
     """A mesh of one cell per block, grouped by vertex count (meshio needs one cell type per group)."""
-    cells, cell_data = [], {name: [] for name in per_block}
+    cells = []
+    cell_data: dict[str, list[np.ndarray]] = {name: [] for name in per_block}
     for n in np.unique(counts):
         blocks = np.flatnonzero(counts == n)
         cells.append(cell_block(int(n), blocks))
@@ -93,7 +94,7 @@ def solid_blocks_mesh(vertices: np.ndarray, mesh: PolyhedronMesh, velocity: np.n
     nb = mesh.n_blocks
     counts = np.diff(mesh.block_ptr)
     faces = np.split(mesh.face_vertex, mesh.face_ptr[1:-1])
-    per_block_faces = [[] for _ in range(nb)]
+    per_block_faces: list[list[np.ndarray]] = [[] for _ in range(nb)]
     for block, face in zip(mesh.face_block, faces):
         per_block_faces[block].append(face)
     per_block = {

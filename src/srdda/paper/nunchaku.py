@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..integrators.methods import MethodName
 from ..model import Material, Model
 from ..results import Result
 from ..settings import RunSettings
@@ -30,7 +31,7 @@ PAPER_TABLE5 = {  # step: {method: distance B1-B2 (m)}
 }
 
 
-def build(method: str, n_steps: int = 1800, correct_drift: bool = False) -> tuple[Model, RunSettings]:
+def build(method: MethodName, n_steps: int = 1800, correct_drift: bool = False) -> tuple[Model, RunSettings]:
     """The nunchaku model and its run settings for ``method``."""
     m = Model(gravity=(0.0, -10.0))
     m.add_material("stick", Material(density=2500.0, young=2e10, poisson=0.45))

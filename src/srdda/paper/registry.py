@@ -16,6 +16,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from ..integrators.methods import MethodName
 from ..model import Model
 from ..results import Result
 from ..settings import RunSettings
@@ -49,11 +50,11 @@ class Example:
     title: str
     tables: Callable[[dict[str, Result]], list[Row]]
     model_file: str | None = None  # under examples_dir() / "paper"
-    builder: Callable[[str], tuple[Model, RunSettings]] | None = None
+    builder: Callable[[MethodName], tuple[Model, RunSettings]] | None = None
     notes: str = ""  # the choices made where the paper is silent, for the report (Markdown)
     point_names: tuple[str, ...] = ()  # the paper's names of the measured points, in order (figures)
 
-    def build(self, method: str) -> tuple[Model, RunSettings]:
+    def build(self, method: MethodName) -> tuple[Model, RunSettings]:
         """The model and run settings of this example for ``method``."""
         if self.builder is not None:
             return self.builder(method)

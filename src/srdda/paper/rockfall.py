@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..integrators.methods import MethodName
 from ..model import JointMaterial, Material, Model
 from ..results import Result
 from ..settings import RunSettings
@@ -70,7 +71,7 @@ def slope_profile() -> np.ndarray:
     return np.array(points)
 
 
-def build(method: str) -> tuple[Model, RunSettings]:
+def build(method: MethodName) -> tuple[Model, RunSettings]:
     """The rockfall model and its run settings for ``method``."""
     profile = slope_profile()
     model = Model(gravity=(0.0, -10.0))

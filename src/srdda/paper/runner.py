@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
+from ..integrators.methods import MethodName
 from ..results import Result
 from ..simulation import run
 from .registry import Row, get_example
@@ -10,7 +11,7 @@ from .registry import Row, get_example
 __all__ = ["run_example", "relative_error"]
 
 
-def run_example(name: str, methods: Sequence[str],
+def run_example(name: str, methods: Sequence[MethodName],
                 progress: Callable[[str, int, int], None] | None = None) -> tuple[dict[str, Result], list[Row]]:
     """Run example ``name`` under each method; returns the results and the table rows."""
     example = get_example(name)

@@ -36,6 +36,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..constraints import MotionHistory
+from ..integrators.methods import MethodName
 from ..model import Material, Model
 from ..results import Result
 from ..settings import RunSettings
@@ -48,7 +49,7 @@ N_BARS, BAR_LENGTH, BAR_HEIGHT = 40, 0.25, 0.10
 SPRING = 2e8  # N/m
 DENSITY = 1.2e8  # kg/m³, chosen (see module doc)
 DT, PERIOD_STEPS, AMPLITUDE = 0.005, 300, 0.25
-PAPER_PERIODS = {  # step: {method: periods in CS, earliest first}
+PAPER_PERIODS: dict[int, dict[str, tuple[int, ...] | None]] = {  # step: {method: periods in CS, earliest first}
     300: {"dda0": (300,), "dda1": (300,), "srdda": (300,)},
     600: {"dda0": None, "dda1": None, "srdda": (299, 302)},  # DDA0/DDA1: two periods in about 573 CS
     900: {"dda0": (270, 281, 301), "dda1": (275, 281, 304), "srdda": (301, 302, 301)},
@@ -56,7 +57,7 @@ PAPER_PERIODS = {  # step: {method: periods in CS, earliest first}
 PAPER_TWO_PERIODS_600 = 573
 
 
-def build(method: str, n_steps: int = 900) -> tuple[Model, RunSettings]:
+def build(method: MethodName, n_steps: int = 900) -> tuple[Model, RunSettings]:
     """The bar-spring chain and its run settings for ``method``."""
     m = Model()
     m.add_material("bar", Material(density=DENSITY, young=2e10, poisson=0.25))

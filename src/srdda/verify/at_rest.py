@@ -15,6 +15,7 @@ import numpy as np
 
 from ..bench.models import brick_wall
 from ..cases.slope3d import wedge_friction_for, wedge_model
+from ..integrators.methods import MethodName
 from ..model import Model
 from ..settings import RunSettings
 from ..simulation import run
@@ -54,7 +55,7 @@ def _incline(dim: int) -> Model:
     return m if dim == 2 else m.extruded(1.0)
 
 
-def _rows(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
+def _rows(name: str, dim: int, methods: tuple[MethodName, ...]) -> list[Row]:
     rows: list[Row] = []
     for solver in ("newton", "open-close"):
         for method in methods if solver == "newton" else ("srdda",):
@@ -81,11 +82,11 @@ def _rows(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
 
 @case("at-rest-2d", dim=2, methods=("srdda", "dda1", "dda0"),
       description="after an equilibrium stage, the incline at φ = 35° and a 30 x 30 brick wall stay at rest")
-def at_rest_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def at_rest_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     return _rows("at-rest-2d", 2, methods)
 
 
 @case("at-rest-3d", dim=3, methods=("srdda", "dda1", "dda0"),
       description="after an equilibrium stage, the extruded incline at φ = 35° and the wedge at FS 1.2, 1.05 stay")
-def at_rest_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def at_rest_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     return _rows("at-rest-3d", 3, methods)

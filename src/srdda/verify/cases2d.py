@@ -5,8 +5,10 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..assembly.blocks import mass_matrices
+from ..integrators.methods import MethodName
+from ..integrators.schemes import SchemeName
 from ..kinematics.blocktype import PLANE
-from ..model import JointMaterial, Material, Model
+from ..model import JointMaterial, Material, Model, PlaneKind
 from ..paper import get_example
 from ..paper.nunchaku import build as build_nunchaku, hinge_distance
 from ..results import Result
@@ -49,7 +51,7 @@ SPIN_DDA0_AREA = 1e-6
 
 @case("free-spin-2d", dim=2, methods=("dda0", "dda1", "srdda"), quick=True,
       description="a block spinning in free flight: ω and area kept (srdda, dda1); dda0's area grows as predicted")
-def free_spin_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def free_spin_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     n = 2_000 if quick else 10_000
     rows: list[Row] = []
     for method in methods:
@@ -84,7 +86,7 @@ FALL_TOLERANCE = 1e-12
 
 @case("free-fall-2d", dim=2, methods=("dda0", "dda1", "srdda"), quick=True,
       description="a spinning block under gravity: mass kept and momentum p = m(v0 + g t)")
-def free_fall_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def free_fall_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     n = 2_000 if quick else 10_000
     rows: list[Row] = []
     for method in methods:
@@ -95,6 +97,7 @@ def free_fall_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
         res = _completed(run(arrays, RunSettings(dt=FALL_DT, n_steps=n, method=method), keep_history=False),
                          f"free-fall-2d {method}")
         state = res.final_state
+        assert state is not None  # run() leaves its final state
         M = mass_matrices(arrays, state)[0]
         mass = float(arrays.block_mass[0])
         momentum = M @ state.velocity[0]
@@ -141,7 +144,7 @@ def incline_model_2d(phi: float, young: float = 1e9) -> Model:
     return m
 
 
-def _incline_travel(phi: float, method: str) -> tuple[float, float]:
+def _incline_travel(phi: float, method: MethodName) -> tuple[float, float]:
     """Distance (m) the block's centroid travels in 1 s on the incline with friction angle ``phi`` (°)."""
     m = incline_model_2d(phi)
     res = _completed(run(m, RunSettings(dt=1e-3, n_steps=1000, method=method, penalty=INCLINE_PENALTY),
@@ -152,7 +155,7 @@ def _incline_travel(phi: float, method: str) -> tuple[float, float]:
 
 @case("incline-2d", dim=2, methods=("dda0", "dda1", "srdda"),
       description="a block on a 30° incline: sliding acceleration g(sin ψ − cos ψ tan φ); at rest for φ = 35°")
-def incline_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def incline_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         for phi in SLIDING_ANGLES:
@@ -201,7 +204,8 @@ def _compound_half_period(d: float, k2: float) -> float:
 
     def turn(t: float, y: np.ndarray) -> float:
         return y[1]
-    turn.direction = 1.0  # ω rising through zero: the far turning point
+    # ω rising through zero: the far turning point; solve_ivp reads it off the function, which mypy has no type for
+    turn.direction = 1.0  # type: ignore[attr-defined]
 
     sol = solve_ivp(lambda t, y: [y[1], -c * np.cos(y[0])], (0.0, 20.0), [0.0, 0.0], events=turn,
                     rtol=1e-11, atol=1e-12)
@@ -210,7 +214,7 @@ def _compound_half_period(d: float, k2: float) -> float:
 
 @case("pendulum-2d", dim=2, methods=("dda0", "dda1", "srdda"),
       description="the paper's rod (4.2) and pendulum (4.1) against the compound pendulum of the same body")
-def pendulum_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def pendulum_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for name, (d, k2, block) in SWINGS.items():
         omega_bottom = -np.sqrt(2 * SWING_G * d / (d * d + k2))
@@ -234,7 +238,7 @@ def pendulum_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 # spacing of the upward zero crossings (interpolated) from the start, which give two whole cycles.
 SPRING_MASS, SPRING_PERIOD, SPRING_STEPS_PER_PERIOD, SPRING_PERIODS = 1000.0, 1.0, 1000, 3
 SPRING_K = 4 * np.pi**2 * SPRING_MASS / SPRING_PERIOD**2
-SPRING_SCHEMES = {  # row label: (method, scheme override)
+SPRING_SCHEMES: dict[str, tuple[MethodName, SchemeName | None]] = {  # row label: (method, scheme override)
     "dda0": ("dda0", None), "dda1": ("dda1", None), "srdda": ("srdda", None),
     "srdda, chung-hulbert": ("srdda", "chung-hulbert"),
 }
@@ -243,7 +247,7 @@ SPRING_SCHEMES = {  # row label: (method, scheme override)
 SPRING_PERIOD_TOLERANCE = 1e-5
 
 
-def _spring_run(method: str, scheme: str | None) -> Result:
+def _spring_run(method: MethodName, scheme: SchemeName | None) -> Result:
     m = Model()
     m.add_material("m", Material(density=SPRING_MASS, young=1e12, poisson=0.2))
     m.add_block([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]], "m", velocity=(0.01, 0.0))
@@ -264,7 +268,7 @@ def shi_decay_per_cycle(omega_dt: float, steps_per_cycle: float) -> float:
 
 @case("spring-mass-2d", dim=2, methods=("dda0", "dda1", "srdda"),
       description="a block on a spring: period 2π√(m/k) under each scheme; the damping of Shi's scheme")
-def spring_mass_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def spring_mass_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for label, (method, scheme) in SPRING_SCHEMES.items():
         if method not in methods:
@@ -294,7 +298,7 @@ HINGE_GAP = 1e-9  # m
 
 @case("hinge-gap-2d", dim=2, methods=("dda0", "srdda"),
       description="the nunchaku (4.4): the hinge gap |B1 − B2| stays below 1e-9 m")
-def hinge_gap_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def hinge_gap_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         model, settings = build_nunchaku(method)
@@ -317,7 +321,7 @@ UNIAXIAL_STRAIN = 1e-6
 UNIAXIAL_DRIFT = 1e-12  # m
 
 
-def _uniaxial_strains(plane: str) -> tuple[float, float, float]:
+def _uniaxial_strains(plane: PlaneKind) -> tuple[float, float, float]:
     """Axial and lateral strain from the settled block's vertices, and its centroid drift (m)."""
     m = Model()
     m.add_material("rock", Material(density=2500.0, young=UNIAXIAL_E, poisson=UNIAXIAL_NU, plane=plane))
@@ -329,6 +333,7 @@ def _uniaxial_strains(plane: str) -> tuple[float, float, float]:
             m.add_point_load([x, y], [sign * half, 0.0], block=0)
     res = _completed(run(m, RunSettings(dt=1e-3, n_steps=300, method="srdda", rho_inf=0.0), keep_history=False),
                      f"uniaxial-2d {plane}")
+    assert res.final_state is not None  # run() leaves its final state
     v = res.final_state.vertices
     right, top = v[:, 0] > lx / 2, v[:, 1] > ly / 2
     axial = (v[right, 0].mean() - v[~right, 0].mean()) / lx - 1.0
@@ -339,13 +344,14 @@ def _uniaxial_strains(plane: str) -> tuple[float, float, float]:
 
 @case("uniaxial-2d", dim=2, methods=("srdda",),
       description="a free block pulled at two opposite edges: axial σ/E' and lateral strain, plane stress and strain")
-def uniaxial_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def uniaxial_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     if "srdda" not in methods:
         return rows
     E, nu, s = UNIAXIAL_E, UNIAXIAL_NU, UNIAXIAL_STRESS
     # plane stress: ε_x = σ/E, ε_y = -νσ/E; plane strain (ε_z = 0): ε_x = (1-ν²)σ/E, ε_y = -ν(1+ν)σ/E
-    exact = {"stress": (s / E, -nu * s / E), "strain": ((1 - nu * nu) * s / E, -nu * (1 + nu) * s / E)}
+    exact: dict[PlaneKind, tuple[float, float]] = {
+        "stress": (s / E, -nu * s / E), "strain": ((1 - nu * nu) * s / E, -nu * (1 + nu) * s / E)}
     for plane, (axial_ref, lateral_ref) in exact.items():
         axial, lateral, drift = _uniaxial_strains(plane)
         rows.append(row("uniaxial-2d", f"axial strain, plane {plane}", "srdda", axial, axial_ref, UNIAXIAL_STRAIN))

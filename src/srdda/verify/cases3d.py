@@ -8,6 +8,7 @@ import numpy as np
 
 from ..cases.solid import (Measured, conical_pendulum_case, extruded_case, intermediate_axis_case, spin_case,
                            uniaxial_case)
+from ..integrators.methods import MethodName
 from .registry import Row, case, row
 
 # spin: ω about a principal axis and the volume of an exact rotation stay to rounding over 10,000 steps
@@ -32,7 +33,7 @@ def _rows(name: str, measured: list[Measured], tolerance: dict[str, float | None
 
 @case("spin-3d", dim=3, methods=("dda0", "dda1", "srdda"), quick=True,
       description="a box spinning about a principal axis: ω and volume kept; dda0's volume grows as predicted")
-def spin_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def spin_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         measured = spin_case(method, steps=2_000 if quick else 10_000)
@@ -43,7 +44,7 @@ def spin_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 
 @case("intermediate-axis-3d", dim=3, methods=("srdda", "dda1", "dda0"),
       description="a concave T prism spun near its intermediate axis flips as Euler's equations say (srdda)")
-def intermediate_axis_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def intermediate_axis_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         bounded = method == "srdda"  # dda0 and dda1 keep Shi's inertia: reported beside, not judged
@@ -57,10 +58,10 @@ def intermediate_axis_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
     return rows
 
 
-def _extruded_rows(name: str, example: str, methods: tuple[str, ...], **soften: float) -> list[Row]:
+def _extruded_rows(name: str, example: str, methods: tuple[MethodName, ...], **soften: float) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
-        flat, solid, other = extruded_case(example, method, **soften)
+        flat, solid, other = extruded_case(example, method, young=soften.get("young"), penalty=soften.get("penalty"))
         scale = float(np.abs(flat).max())
         floor = float(np.abs(other - flat).max()) / scale
         ours = float(np.abs(solid - flat).max()) / scale
@@ -75,20 +76,20 @@ def _extruded_rows(name: str, example: str, methods: tuple[str, ...], **soften: 
 
 @case("extruded-rod-3d", dim=3, methods=("dda0", "dda1", "srdda"),
       description="the paper's rod (4.2) as a 1 m prism moves as the 2D rod")
-def extruded_rod_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def extruded_rod_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     return (_extruded_rows("extruded-rod-3d", "rod", methods, young=2e10, penalty=2e12)
             + _extruded_rows("extruded-rod-3d", "rod", methods))
 
 
 @case("extruded-pendulum-3d", dim=3, methods=("dda0", "dda1", "srdda"),
       description="the paper's pendulum (4.1) as 1 m prisms moves as the 2D pendulum")
-def extruded_pendulum_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def extruded_pendulum_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     return _extruded_rows("extruded-pendulum-3d", "pendulum", methods)
 
 
 @case("conical-pendulum-3d", dim=3, methods=("srdda", "dda1", "dda0"),
       description="a box hung by a ball hinge on a steady conical orbit: period and height (srdda)")
-def conical_pendulum_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def conical_pendulum_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         bound = CONICAL if method == "srdda" else None  # without the gyroscopic term the orbit is off by 10%
@@ -99,8 +100,8 @@ def conical_pendulum_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 
 @case("uniaxial-3d", dim=3, methods=("srdda",),
       description="a free box pulled by equal and opposite tractions: Hooke's law, no drift")
-def uniaxial_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def uniaxial_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     measured = uniaxial_case("srdda")
-    tol = {"axial strain": UNIAXIAL, "lateral strain y": UNIAXIAL, "lateral strain z": UNIAXIAL,
-           "centroid drift (m)": UNIAXIAL_DRIFT}
+    tol: dict[str, float | None] = {"axial strain": UNIAXIAL, "lateral strain y": UNIAXIAL,
+                                    "lateral strain z": UNIAXIAL, "centroid drift (m)": UNIAXIAL_DRIFT}
     return _rows("uniaxial-3d", measured, tol)

@@ -9,11 +9,14 @@ sliding acceleration.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..constraints.bolts import bolt_forces
 from ..history import TimeHistory
+from ..integrators.methods import MethodName
 from ..io.records import SYNTHETIC_RECORD, record_history
 from ..model import JointMaterial, Material, Model
 from ..results import Result
@@ -26,7 +29,7 @@ __all__ = ["newmark_sliding", "newmark_model", "bolted_block_model", "bolt_requi
 QUAKE_G = 9.81
 
 
-def _rotate(points: list[list[float]], angle: float) -> np.ndarray:
+def _rotate(points: Sequence[Sequence[float] | np.ndarray], angle: float) -> np.ndarray:
     c, s = np.cos(angle), np.sin(angle)
     return np.asarray(points, dtype=float) @ np.array([[c, -s], [s, c]]).T
 
@@ -88,6 +91,7 @@ def newmark_sliding(record: TimeHistory, psi: float, phi_deg: float, gravity: fl
     e, n = _down_slope(psi)
     tan_phi = np.tan(np.radians(phi_deg))
     g = np.array([0.0, -gravity])
+    assert record.table is not None  # a record is a table
     knots = record.table[:, 0]
     step = float(np.min(np.diff(knots)))  # no solver step across a kink of the piecewise-linear record
 
@@ -103,13 +107,14 @@ def newmark_sliding(record: TimeHistory, psi: float, phi_deg: float, gravity: fl
     if min(up_slope(t) for t in samples) < -1e-9 * gravity:
         raise ValueError("the block would slide up the incline: not Newmark's one-way sliding")
 
+    # solve_ivp reads the events' attributes off the functions, which mypy has no type for
     def slip_starts(t: float, y: np.ndarray) -> float:
         return drive(t)
-    slip_starts.terminal, slip_starts.direction = True, 1.0
+    slip_starts.terminal, slip_starts.direction = True, 1.0  # type: ignore[attr-defined]
 
     def slip_ends(t: float, y: np.ndarray) -> float:
         return y[1]
-    slip_ends.terminal, slip_ends.direction = True, -1.0
+    slip_ends.terminal, slip_ends.direction = True, -1.0  # type: ignore[attr-defined]
 
     t, s = 0.0, 0.0
     sliding = drive(0.0) > 0
@@ -130,7 +135,7 @@ def newmark_sliding(record: TimeHistory, psi: float, phi_deg: float, gravity: fl
 
 @case("newmark", dim=2, methods=("dda0", "dda1", "srdda"),
       description="a block on a frictional incline under the synthetic record: permanent slip vs Newmark's rigid block")
-def newmark(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def newmark(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     record = newmark_record()
     reference = newmark_sliding(record, NEWMARK_PSI, NEWMARK_PHI, QUAKE_G, NEWMARK_END)
     e, _ = _down_slope(NEWMARK_PSI)
@@ -190,7 +195,7 @@ def bolted_block_model(strength: float | None, ramp: float | None) -> Model:
 @case("bolted-block", dim=2, methods=("dda0", "dda1", "srdda"),
       description="a block on a steep incline held by a bolt: force vs the static requirement; broken: sliding "
                   "acceleration")
-def bolted_block(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def bolted_block(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     weight = 2500.0 * 0.5 * QUAKE_G
     required = bolt_requirement(weight, BOLT_PSI, BOLT_PHI, BOLT_BETA)
     sliding = QUAKE_G * (np.sin(BOLT_PSI) - np.cos(BOLT_PSI) * np.tan(np.radians(BOLT_PHI)))
@@ -202,6 +207,7 @@ def bolted_block(methods: tuple[str, ...], quick: bool) -> list[Row]:
         res = _completed(run(arrays, RunSettings(dt=1e-3, end_time=BOLT_RAMP, method=method, penalty=1e10),
                              keep_history=False), f"bolted-block {method}")
         state = res.final_state
+        assert state is not None  # run() leaves its final state
         rows.append(row("bolted-block", "bolt force at rest (N/m)", method, bolt_forces(arrays.links, state).axial[0],
                         required, BOLT_FORCE))
         rows.append(row("bolted-block", "block speed at the end of the load ramp (m/s, information)", method,

@@ -15,6 +15,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..cases.slope3d import WEDGE_PLANES, wedge_cut_model, wedge_solution
+from ..integrators.methods import MethodName
 from ..model import JointMaterial, Material, Model
 from ..results import Result
 from ..settings import RunSettings
@@ -57,7 +58,7 @@ def stacked_column(n: int, dim: int) -> Model:
     return m
 
 
-def _settings(method: str, steps: int = FALL_STEPS) -> RunSettings:
+def _settings(method: MethodName, steps: int = FALL_STEPS) -> RunSettings:
     return RunSettings(dt=STAGE_DT, n_steps=steps, method=method, penalty=STAGE_PENALTY)
 
 
@@ -67,7 +68,7 @@ def _completed(result: Result, what: str) -> Result:
     return result
 
 
-def _column(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
+def _column(name: str, dim: int, methods: tuple[MethodName, ...]) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         m = stacked_column(COLUMN_BLOCKS, dim)
@@ -86,7 +87,7 @@ def _column(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
     return rows
 
 
-def _excavation(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
+def _excavation(name: str, dim: int, methods: tuple[MethodName, ...]) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         m = stacked_column(2, dim)
@@ -105,11 +106,16 @@ def _excavation(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
 
 COLUMN = "an equilibrium stage of a 10-block column: ratio < 1e-5, σv = ρ g h at every centroid"
 EXCAVATION = "equilibrium, then the block under another removed: it falls at g from the stage's start"
-for _dim, _methods in ((2, ("dda0", "dda1", "srdda")), (3, ("srdda",))):
-    case(f"stage-column-{_dim}d", dim=_dim, methods=_methods, description=COLUMN)(
-        lambda methods, quick, dim=_dim: _column(f"stage-column-{dim}d", dim, methods))
-    case(f"stage-excavation-{_dim}d", dim=_dim, methods=_methods, description=EXCAVATION)(
-        lambda methods, quick, dim=_dim: _excavation(f"stage-excavation-{dim}d", dim, methods))
+_DIM_METHODS: tuple[tuple[int, tuple[MethodName, ...]], ...] = ((2, ("dda0", "dda1", "srdda")), (3, ("srdda",)))
+for _dim, _methods in _DIM_METHODS:
+    def _column_run(methods: tuple[MethodName, ...], quick: bool, dim: int = _dim) -> list[Row]:
+        return _column(f"stage-column-{dim}d", dim, methods)
+
+    def _excavation_run(methods: tuple[MethodName, ...], quick: bool, dim: int = _dim) -> list[Row]:
+        return _excavation(f"stage-excavation-{dim}d", dim, methods)
+
+    case(f"stage-column-{_dim}d", dim=_dim, methods=_methods, description=COLUMN)(_column_run)
+    case(f"stage-excavation-{_dim}d", dim=_dim, methods=_methods, description=EXCAVATION)(_excavation_run)
 
 
 # stage-wedge-cut-3d: Δt = 1 ms, k_n = 1e11 N/m as wedge-3d, contacts by Newton (docs/examples-staged.md); the cut
@@ -125,7 +131,7 @@ WEDGE_CUT_ACCELERATION = 2e-2
 
 @case("stage-wedge-cut-3d", dim=3, methods=("srdda",),
       description="a wedge above a cut slope: stays after the toe is cut at FS 1.2, slides at FS 0.8 (Hoek & Bray)")
-def wedge_cut(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def wedge_cut(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         m = wedge_cut_model()

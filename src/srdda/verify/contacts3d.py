@@ -11,6 +11,8 @@ import numpy as np
 from ..cases.contacts3d import drop_case, incline_case
 from ..cases.slope3d import (SLIDE_TOPPLE_CASES, WEDGE_PLANES, SlideToppleCase, incline_acceleration,
                              slide_topple_model, wedge_friction_for, wedge_model, wedge_solution)
+from ..integrators.methods import MethodName
+from ..model import Model
 from ..settings import RunSettings
 from ..simulation import run
 from .cases2d import INCLINE_PENALTY, incline_model_2d
@@ -35,7 +37,7 @@ INCLINE_AT_REST = 1e-6  # m
 
 @case("incline-3d", dim=3, methods=("srdda", "dda1", "dda0"),
       description="a box on a plane dipping 30° (not along an axis): a = g(sin ψ − cos ψ tan φ); at rest for φ = 35°")
-def incline_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def incline_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         for phi in INCLINE_SLIDING:
@@ -65,7 +67,7 @@ DROP_ENERGY = 1e-6
 
 @case("drop-3d", dim=3, methods=("srdda", "dda1", "dda0"),
       description="a cube dropped on a base at four orientations: the energy balance never rises")
-def drop_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def drop_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         # dda0's linear update stretches a spinning block (volume × (1 + (ωΔt)²) per step), which adds
@@ -99,8 +101,8 @@ EXTRUDED_YOUNG, EXTRUDED_FRICTION_TOLERANCE = 1e14, 1e-7
 EXTRUDED = 1e-6
 
 
-def _travel(model: object, settings: RunSettings) -> float:
-    res = run(model, settings, keep_history=False)  # type: ignore[arg-type]
+def _travel(model: Model, settings: RunSettings) -> float:
+    res = run(model, settings, keep_history=False)
     if not res.completed:
         raise RuntimeError(f"extruded-incline-3d: the run did not complete ({res.status})")
     c = res.array("centroid")[:, 1]
@@ -109,7 +111,7 @@ def _travel(model: object, settings: RunSettings) -> float:
 
 @case("extruded-incline-3d", dim=3, methods=("srdda", "dda1", "dda0"),
       description="the 2D sliding block (incline-2d) as prisms travels as in 2D")
-def extruded_incline_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def extruded_incline_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         for phi in EXTRUDED_ANGLES:
@@ -141,7 +143,7 @@ SLID, TOPPLED = 1e-4, 0.05  # m, rad
 SLIDE_TOPPLE_STEPS = 500
 
 
-def _slide_topple_run(case_: SlideToppleCase, method: str) -> tuple[float, float]:
+def _slide_topple_run(case_: SlideToppleCase, method: MethodName) -> tuple[float, float]:
     model = slide_topple_model(case_)
     arrays = model.arrays()
     res = run(arrays, RunSettings(dt=1e-3, n_steps=SLIDE_TOPPLE_STEPS, method=method, penalty=1e10),
@@ -149,6 +151,7 @@ def _slide_topple_run(case_: SlideToppleCase, method: str) -> tuple[float, float
     if not res.completed:
         raise RuntimeError(f"slide-topple-3d {case_.name} {method}: the run did not complete ({res.status})")
     pivot = [1, 2]  # the block's base vertices at its down-dip end (block 0, built first)
+    assert res.final_state is not None  # run() leaves its final state
     moved = res.final_state.vertices[pivot] - arrays.vertex_position[pivot]
     dip = np.array([np.cos(np.radians(case_.psi)), 0.0, -np.sin(np.radians(case_.psi))])
     rotation = res.final_state.rotation[0]
@@ -158,7 +161,7 @@ def _slide_topple_run(case_: SlideToppleCase, method: str) -> tuple[float, float
 
 @case("slide-topple-3d", dim=3, methods=("srdda", "dda1", "dda0"),
       description="blocks on a 30° incline, one per region of the sliding / toppling chart: each shows its mode")
-def slide_topple_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def slide_topple_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         for c in SLIDE_TOPPLE_CASES:
@@ -189,7 +192,7 @@ WEDGE_ACCELERATION = 2e-2
 
 @case("wedge-3d", dim=3, methods=("srdda", "dda1", "dda0"),
       description="a tetrahedral wedge on two joint planes: stays at FS 1.2, slides along the intersection at FS 0.8")
-def wedge_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def wedge_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         for fs in (1.2, 0.8):

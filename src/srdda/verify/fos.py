@@ -7,6 +7,7 @@ from ..cases.plane_failure import PLANE_FAILURE, plane_failure_model
 from ..cases.slope3d import (WEDGE_PLANES, hoek_bray_wedge_angles, hoek_bray_wedge_factor_of_safety, wedge_friction_for,
                              wedge_model, wedge_solution, wedge_water_forces, wet_wedge_factor_of_safety)
 from ..fos import FactorOfSafety, factor_of_safety, try_factor
+from ..integrators.methods import MethodName
 from ..model import JointMaterial, Model
 from ..settings import RunSettings
 from .registry import Row, case, row
@@ -59,7 +60,7 @@ PLANE_YOUNG, PLANE_SOFT_YOUNG = 1e12, 10e9
 
 @case("fos-plane-2d", dim=2, methods=("srdda",),
       description="srdda fos of Hoek & Bray's plane failure (c, φ, dry tension crack) against the closed form")
-def fos_plane_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def fos_plane_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     exact = PLANE_FAILURE.factor_of_safety()
     model = plane_failure_model(PLANE_FAILURE, young=PLANE_YOUNG)
     soft = factor_of_safety(plane_failure_model(PLANE_FAILURE, young=PLANE_SOFT_YOUNG), PLANE_SETTINGS)
@@ -82,7 +83,7 @@ WEDGE_HEIGHT = 6.0  # m, wedge_model's default
 
 @case("fos-wedge-3d", dim=3, methods=("srdda",),
       description="srdda fos of the tetrahedral wedge (friction of FS 1.2) against Hoek & Bray's wedge solution")
-def fos_wedge_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def fos_wedge_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     phi = wedge_friction_for(WEDGE_FACTOR)
     exact = wedge_solution(*WEDGE_PLANES, phi).factor_of_safety
     cohesive = wedge_model(WEDGE_COHESIVE_FRICTION)
@@ -109,7 +110,7 @@ PLANE_WATER_IDENTITY = 1e-12
 
 @case("fos-plane-wet-2d", dim=2, methods=("srdda",),
       description="srdda fos of Hoek & Bray's plane failure, tension crack full (U, V), against the closed form")
-def fos_plane_wet_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def fos_plane_wet_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     name, depth = "fos-plane-wet-2d", PLANE_FAILURE.crack_depth
     uplift, crack = PLANE_FAILURE.water_forces(depth)
     model = plane_failure_model(PLANE_FAILURE, young=PLANE_YOUNG, water_depth=depth)
@@ -142,7 +143,7 @@ WEDGE_WATER_IDENTITY = 1e-12
 
 @case("fos-wedge-wet-3d", dim=3, methods=("srdda",),
       description="srdda fos of the wedge, water to 3 m in its planes, against (N_i − U_i) tan φ / (W sin ψ_i)")
-def fos_wedge_wet_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def fos_wedge_wet_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     name, phi = "fos-wedge-wet-3d", wedge_friction_for(WEDGE_FACTOR)
     model = wedge_model(phi)
     model.set_water(level=WEDGE_LEVEL)

@@ -6,6 +6,7 @@ Each tolerance is given beside its case with what it measures (docs/verification
 from __future__ import annotations
 
 from ..cases.impacts import impact_case
+from ..integrators.methods import MethodName
 from .registry import Row, case, row
 
 __all__: list[str] = []
@@ -21,7 +22,7 @@ IMPACT_RATIO = 0.02
 IMPACT_BALANCE = 5e-4
 
 
-def _impact_rows(name: str, dim: int, methods: tuple[str, ...], quick: bool) -> list[Row]:
+def _impact_rows(name: str, dim: int, methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     rows: list[Row] = []
     for method in methods:
         drift = 0.0
@@ -37,7 +38,7 @@ def _impact_rows(name: str, dim: int, methods: tuple[str, ...], quick: bool) -> 
 
 
 for _dim in (2, 3):
-    def _run(methods: tuple[str, ...], quick: bool, dim: int = _dim) -> list[Row]:
+    def _run(methods: tuple[MethodName, ...], quick: bool, dim: int = _dim) -> list[Row]:
         return _impact_rows(f"impact-restitution-{dim}d", dim, methods, quick)
 
     case(f"impact-restitution-{_dim}d", dim=_dim, methods=("srdda", "dda1", "dda0"), quick=True,

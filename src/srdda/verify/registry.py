@@ -22,13 +22,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from ..integrators.methods import METHODS
+from ..integrators.methods import METHODS, MethodName
 
 __all__ = ["Case", "CASES", "Row", "case", "row", "run_case", "UnknownCaseError", "expected_seconds",
            "EXPECTED_SECONDS"]
 
 Row = dict[str, Any]
-CaseFunction = Callable[[tuple[str, ...], bool], list[Row]]
+CaseFunction = Callable[[tuple[MethodName, ...], bool], list[Row]]
 
 
 @dataclass(frozen=True)
@@ -38,7 +38,7 @@ class Case:
     name: str
     dim: int
     description: str  # one line
-    methods: tuple[str, ...]  # the methods the case is meaningful for
+    methods: tuple[MethodName, ...]  # the methods the case is meaningful for
     run: CaseFunction
     quick: bool  # True: ``--quick`` runs it shorter with the same tolerances
 
@@ -53,7 +53,7 @@ class UnknownCaseError(KeyError):
         return str(self.args[0])
 
 
-def case(name: str, dim: int, description: str, methods: Sequence[str] = METHODS,
+def case(name: str, dim: int, description: str, methods: Sequence[MethodName] = METHODS,
          quick: bool = False) -> Callable[[CaseFunction], CaseFunction]:
     """Register the decorated function as the verification case ``name``."""
     if name in CASES:

@@ -12,6 +12,7 @@ from ..constraints.water import UNIT_WEIGHT, WaterCrackTerm, contact_water
 from ..contact.pipeline import ContactModel
 from ..contact.record import ContactRecord
 from ..geometry.facets import boundary_simplices
+from ..integrators.methods import MethodName
 from ..model import JointMaterial, Material, Model, ModelArrays
 from ..results import Result
 from ..settings import RunSettings
@@ -62,7 +63,7 @@ def _completed(result: Result, what: str) -> Result:
     return result
 
 
-def _plane_run(model: Model, method: str, dim: int, what: str) -> Result:
+def _plane_run(model: Model, method: MethodName, dim: int, what: str) -> Result:
     penalty = PLANE_PENALTY if dim == 2 else PLANE_PENALTY / 2
     settings = RunSettings(dt=PLANE_DT, n_steps=PLANE_STEPS, method=method, penalty=penalty)
     return _completed(run(model if dim == 2 else model.extruded(1.0), settings), what)
@@ -108,7 +109,7 @@ def _hoek_bray_rows(name: str, dim: int) -> list[Row]:
                 0.5 * UNIT_WEIGHT * HOEK_BRAY_DEPTH**2, HOEK_BRAY_IDENTITY)]
 
 
-def _plane_rows(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
+def _plane_rows(name: str, dim: int, methods: tuple[MethodName, ...]) -> list[Row]:
     rows = _hoek_bray_rows(name, dim)
     weight, mass, _, _ = wet_plane_forces(None, 0.0)
     dry_fs = plane_failure_factor(weight, PLANE_DIP, FRICTION)
@@ -134,13 +135,13 @@ def _plane_rows(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
 
 @case("water-plane-2d", dim=2, methods=("dda1", "srdda"),
       description="plane failure with water: Hoek & Bray's U and V; dry and a little water at rest, wet sliding at a")
-def water_plane_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def water_plane_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     return _plane_rows("water-plane-2d", 2, methods)
 
 
 @case("water-plane-3d", dim=3, methods=("dda1", "srdda"),
       description="water-plane-2d's block extruded: at rest dry and with a little water, wet sliding at a")
-def water_plane_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def water_plane_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     return _plane_rows("water-plane-3d", 3, methods)
 
 
@@ -177,7 +178,7 @@ def _uplift_model(dim: int) -> Model:
     return m
 
 
-def _uplift_rows(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
+def _uplift_rows(name: str, dim: int, methods: tuple[MethodName, ...]) -> list[Row]:
     model = _uplift_model(dim)
     arrays = model.arrays()
     area = 2.0 if dim == 2 else 4.0
@@ -198,11 +199,11 @@ def _uplift_rows(name: str, dim: int, methods: tuple[str, ...]) -> list[Row]:
 
 @case("water-uplift-2d", dim=2, methods=("dda1", "srdda"),
       description="a block on a submerged joint: the water force is p × length; the joint carries W − U")
-def water_uplift_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def water_uplift_2d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     return _uplift_rows("water-uplift-2d", 2, methods)
 
 
 @case("water-uplift-3d", dim=3, methods=("dda1", "srdda"),
       description="a box on a submerged joint: the water force is p × area; the joint carries W − U")
-def water_uplift_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
+def water_uplift_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
     return _uplift_rows("water-uplift-3d", 3, methods)
