@@ -7,7 +7,8 @@ import pytest
 import scipy.sparse.linalg as spla
 
 from srdda.assembly.system import BlockSystem
-from srdda.solvers import _Analysing, _BlockPattern, available_solvers, get_solver
+from srdda.solvers import available_solvers, get_solver
+from srdda.solvers._direct import _Analysing, _BlockPattern
 
 
 def _system(n_blocks: int, seed: int = 0) -> BlockSystem:

@@ -1,48 +1,13 @@
-"""The linear-solver seam: one small interface, several backends.
+"""The direct backends: LAPACK on the dense matrix, SuperLU, CHOLMOD and PARDISO (the package doc compares them).
 
-``get_solver(name, tolerance)`` returns an object with ``solve(system, rhs) -> x``
-for a :class:`~srdda.assembly.BlockSystem`; one instance serves one run and
-keeps what the next solve can reuse (a factor, an analysis, a preconditioner,
-the last solution). Backends (measured in docs/performance.md):
-
-* ``dense``: LAPACK (numpy) on the dense matrix; fastest for a handful of blocks.
-* ``superlu``: scipy's SuperLU with a symmetric ordering; always available. It
-  keeps its factor while the matrix is unchanged; it cannot keep an ordering
-  or a symbolic analysis, so every new matrix is ordered and factorised anew.
-* ``cholmod``: CHOLMOD via scikit-sparse (``pip install srdda[cholmod]``) and
-  ``pardiso``: MKL PARDISO via pypardiso (``pip install srdda[pardiso]``):
-  Cholesky of the symmetric positive definite matrix (every unconstrained DDA
-  system), with the fill-reducing ordering and the symbolic analysis made once
-  per block pattern and reused while the pattern of later matrices lies inside
-  it (:class:`_BlockPattern`): contacts that open and close change values, not
-  the analysis.
-* ``cg-amg``, ``cg-jacobi``: the preconditioned conjugate gradient
-  (:mod:`srdda.solvers_iterative`) with smoothed-aggregation multigrid (pyamg)
-  or block-Jacobi, warm-started from the previous solution, stopping when every
-  unknown of Δd is estimated within ``tolerance`` (m) of the exact solution.
-* ``auto``: dense up to ``DENSE_LIMIT`` unknowns, the best installed direct
-  backend (pardiso, cholmod, superlu) up to ``ITERATIVE_LIMIT`` blocks,
-  ``cg-jacobi`` above (falling back to the direct backend for a solve it
-  cannot make).
-* ``device="gpu"`` (``cg-jacobi`` and ``auto``): the same conjugate gradient
-  with its iterations on a CUDA GPU through CuPy (:mod:`srdda.backends`).
-
-A system with constraint rows (``system.n_constraints > 0``) is the saddle
-point [[A, Cᵀ], [C, 0]]·[Δd; μ] = [F; g]; ``rhs`` then has n + nc entries and
-the solution holds Δd followed by μ. It is symmetric indefinite, so it is
-solved by LU of the augmented matrix with pivoting: LAPACK's Bunch-Kaufman
-LDLᵀ (``dense``), SuperLU with partial pivoting and a COLAMD ordering (every
-sparse backend: Cholesky and the conjugate gradient need a definite matrix).
-See docs/constraints.md.
+A system with constraint rows is solved by LU of the augmented matrix with pivoting (every backend here:
+Cholesky needs a definite matrix).
 """
 from __future__ import annotations
 
-import importlib.util
 import os
 import warnings
 from collections.abc import Callable
-from dataclasses import replace
-from typing import Protocol
 
 import numpy as np
 import scipy.linalg as sla
@@ -50,35 +15,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from threadpoolctl import threadpool_limits
 
-from .assembly.system import BlockSystem
-from .solvers_iterative import (BlockJacobi, IterativeSolverError, PCGResult, SmoothedAggregation, block_jacobi_pcg,
-                                pcg, smallest_eigenvalue_estimate)
+from ..assembly.system import BlockSystem
+from ._registry import SolverError, check_finite, register_solver
 
-__all__ = ["LinearSolver", "SolverError", "get_solver", "available_solvers", "blas_threads_for_steps", "DENSE_LIMIT",
-           "ITERATIVE_LIMIT", "DEFAULT_TOLERANCE", "SOLVERS"]
-
-DENSE_LIMIT = 120  # unknowns: LAPACK on the dense matrix up to here (20 blocks in 2D)
-ITERATIVE_LIMIT = 500  # blocks: ``auto`` uses a direct factorisation up to here, the conjugate gradient above
-# The iterative backends stop when every unknown of the increment is estimated within this of the exact
-# solution (m; rad and 1 for rotations and strains, i.e. m per m of block size): 1e-9 m keeps 200 steps
-# of the 1,000-block slope within the issue's 1e-6 m of the direct run even if the errors all added up.
-DEFAULT_TOLERANCE = 1e-9
-
-
-class SolverError(RuntimeError):
-    """The global system could not be solved (singular or not finite)."""
-
-
-class LinearSolver(Protocol):
-    name: str
-
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray: ...
-
-
-def _check(x: np.ndarray) -> np.ndarray:
-    if not np.all(np.isfinite(x)):
-        raise SolverError("the solution is not finite: the system is singular or ill-posed")
-    return x
+__all__ = ["DenseSolver", "SuperLUSolver", "CholmodSolver", "PardisoSolver", "blas_threads_for_steps"]
 
 
 Matrix = np.ndarray | sp.csr_matrix
@@ -122,7 +62,7 @@ class _Factorizing:
             factor = self.factor(matrix, bool(system.n_constraints))
             self.factorizations += 1
             self._last = (matrix, factor)
-        return _check(factor(rhs))
+        return check_finite(factor(rhs))
 
 
 def _saddle_superlu(matrix: sp.csr_matrix) -> Factor:
@@ -144,7 +84,7 @@ class DenseSolver:
             with warnings.catch_warnings():
                 if system.n_constraints:  # O(1) constraint rows beside stiff penalties: rcond ~1e-23 by scaling
                     warnings.simplefilter("ignore", sla.LinAlgWarning)
-                return _check(sla.solve(matrix, rhs, assume_a="sym", check_finite=False))
+                return check_finite(sla.solve(matrix, rhs, assume_a="sym", check_finite=False))
         except (np.linalg.LinAlgError, sla.LinAlgError) as exc:
             raise SolverError(f"singular system: {exc}") from exc
 
@@ -265,7 +205,7 @@ class _Analysing:
             factor = self.factorize(matrix)
             self.factorizations += 1
             self._last = (matrix, factor)
-        return _check(factor(rhs))
+        return check_finite(factor(rhs))
 
 
 class CholmodSolver(_Analysing):
@@ -328,95 +268,6 @@ class PardisoSolver(_Analysing):
         return lambda rhs: self._phase(33, matrix, rhs)
 
 
-class ConjugateGradientSolver:
-    """Preconditioned conjugate gradient to a displacement tolerance (solvers_iterative module doc).
-
-    ``preconditioner`` is ``"amg"`` (pyamg's smoothed aggregation) or
-    ``"jacobi"`` (the inverse block diagonal, rebuilt for every matrix: one
-    batched ndof×ndof inverse). Each solve starts from the previous solution
-    (the open-close iteration changes a few contacts; successive steps move
-    alike).
-
-    A multigrid hierarchy is built from one matrix and kept while it serves:
-    a solve that has not converged after ``REBUILD_ITERATIONS`` builds a new
-    one from its own matrix and goes on from where it stopped (contacts that
-    open or close can leave a block held by inertia alone, which the old
-    aggregates do not represent; a fresh hierarchy solves these systems from
-    zero in 10-25 iterations). The stopping rule's estimate of λ_min(M⁻¹A):
-    for a new hierarchy, ``PROBE_ITERATIONS`` Lanczos steps from a random
-    vector, halved (they overestimate it by up to 20 % on the walls and slopes
-    measured), then the smallest Ritz value of the solves made with it; for
-    block-Jacobi, the smallest of all solves (the first one starts from zero).
-    Systems with constraint rows (saddle points, not definite) go to the best
-    installed direct backend.
-    """
-
-    MAX_ITERATIONS = 5000
-    REBUILD_ITERATIONS = 40
-    PROBE_ITERATIONS = 20
-
-    def __init__(self, preconditioner: str, tolerance: float = DEFAULT_TOLERANCE) -> None:
-        if preconditioner not in ("amg", "jacobi"):
-            raise ValueError(f"unknown preconditioner {preconditioner!r}; choose 'amg' or 'jacobi'")
-        if not tolerance > 0:
-            raise ValueError(f"the displacement tolerance must be positive, got {tolerance}")
-        self.name = f"cg-{preconditioner}"
-        self.preconditioner = preconditioner
-        self.tolerance = tolerance
-        self.direct = _best_direct()
-        self.iterations: list[int] = []  # per solve (benchmarks and tests read them)
-        self.setups = 0  # preconditioners built
-        self._x: np.ndarray | None = None
-        self._amg: SmoothedAggregation | None = None
-        self._ritz = np.inf
-
-    def _build_hierarchy(self, matrix: sp.bsr_matrix) -> SmoothedAggregation:
-        self._amg = SmoothedAggregation(matrix)
-        self.setups += 1
-        start = np.random.default_rng(0).standard_normal(matrix.shape[0])  # seeded: runs stay reproducible
-        self._ritz = 0.5 * smallest_eigenvalue_estimate(matrix.__matmul__, self._amg, start, self.PROBE_ITERATIONS)
-        return self._amg
-
-    def _pcg(self, system: BlockSystem, matrix: sp.bsr_matrix, rhs: np.ndarray, x0: np.ndarray) -> PCGResult:
-        if self.preconditioner == "jacobi":
-            self.setups += 1
-            return block_jacobi_pcg(matrix, BlockJacobi(system.diag), rhs, x0, self.tolerance, self.MAX_ITERATIONS,
-                                    self._ritz)
-        if self._amg is not None and self._amg.hierarchy.levels[0].A.shape == matrix.shape:
-            first = pcg(matrix.__matmul__, self._amg, rhs, x0, self.tolerance, self.REBUILD_ITERATIONS, self._ritz)
-            if first.converged:
-                return first
-            x0 = first.x
-        else:
-            first = None
-        hierarchy = self._build_hierarchy(matrix)  # sets the estimate self._ritz
-        second = pcg(matrix.__matmul__, hierarchy, rhs, x0, self.tolerance, self.MAX_ITERATIONS, self._ritz)
-        return second if first is None else replace(second, iterations=first.iterations + second.iterations)
-
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
-        if system.n_constraints:
-            return self.direct.solve(system, rhs)
-        matrix = system.to_bsr()
-        if self._x is None or len(self._x) != len(rhs):
-            if self._x is not None or self.preconditioner == "jacobi":  # another model: forget its estimate
-                self._ritz = np.inf
-            self._x = np.zeros_like(rhs)
-        try:
-            result = self._pcg(system, matrix, rhs, self._x)
-        except IterativeSolverError as exc:
-            self._x = None
-            raise SolverError(f"{self.name}: {exc}") from exc
-        if not result.converged:
-            self._x = None
-            raise SolverError(f"{self.name}: the conjugate gradient did not reach the displacement tolerance "
-                              f"{self.tolerance:.3g} m in {result.iterations} iterations (estimated error "
-                              f"{result.final_residual / result.smallest_ritz:.3g} m)")
-        self._ritz = result.smallest_ritz
-        self.iterations.append(result.iterations)
-        self._x = result.x.copy()
-        return _check(result.x)
-
-
 def blas_threads_for_steps() -> threadpool_limits:
     """A context that holds BLAS (OpenBLAS, MKL) to one thread while a run steps.
 
@@ -430,80 +281,7 @@ def blas_threads_for_steps() -> threadpool_limits:
     return threadpool_limits(limits=1, user_api="blas")
 
 
-def _best_direct() -> LinearSolver:
-    """The fastest installed direct backend for large systems (measured in docs/performance.md)."""
-    return get_solver(next(n for n in ("pardiso", "cholmod", "superlu") if n in available_solvers()))
-
-
-class AutoSolver:
-    """The backend by size: dense LAPACK, then a direct factorisation, then the block-Jacobi conjugate gradient.
-
-    Up to ``DENSE_LIMIT`` unknowns: dense. Up to ``ITERATIVE_LIMIT`` blocks: the
-    best installed direct backend (:func:`_best_direct`). Above: ``cg-jacobi``,
-    which falls back to the direct backend for a solve it cannot make (a
-    matrix found not positive definite, no convergence); ``fallbacks`` counts
-    them. Why block-Jacobi and not the multigrid, and the thresholds: measured
-    in docs/performance.md (the open-close iteration's warm-started solves
-    need a few cheap iterations, where a hierarchy is rebuilt often).
-    """
-
-    name = "auto"
-
-    def __init__(self, tolerance: float = DEFAULT_TOLERANCE, iterative: LinearSolver | None = None) -> None:
-        self.dense = DenseSolver()
-        self.direct = _best_direct()
-        # ``iterative``: the conjugate gradient of large systems (a GPU one, srdda.backends); default the CPU's
-        self.iterative = ConjugateGradientSolver("jacobi", tolerance) if iterative is None else iterative
-        self.fallbacks = 0
-
-    def choose(self, system: BlockSystem) -> LinearSolver:
-        """The backend that solves ``system``."""
-        if system.size + system.n_constraints <= DENSE_LIMIT:
-            return self.dense
-        if system.n_blocks <= ITERATIVE_LIMIT or system.n_constraints:
-            return self.direct
-        return self.iterative
-
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
-        chosen = self.choose(system)
-        if chosen is not self.iterative:
-            return chosen.solve(system, rhs)
-        try:
-            return chosen.solve(system, rhs)
-        except SolverError:
-            self.fallbacks += 1
-            return self.direct.solve(system, rhs)
-
-
-_BACKENDS: dict[str, Callable[..., LinearSolver]] = {
-    "dense": DenseSolver, "superlu": SuperLUSolver, "cholmod": CholmodSolver, "pardiso": PardisoSolver,
-    "cg-amg": lambda tolerance: ConjugateGradientSolver("amg", tolerance),
-    "cg-jacobi": lambda tolerance: ConjugateGradientSolver("jacobi", tolerance),
-    "auto": AutoSolver}
-_ITERATIVE = ("cg-amg", "cg-jacobi", "auto")  # the backends that take a displacement tolerance
-_MODULES = {"cholmod": "sksparse", "pardiso": "pypardiso"}
-SOLVERS = tuple(_BACKENDS)
-
-
-def available_solvers() -> list[str]:
-    """Names of the backends usable on this machine."""
-    return [n for n in _BACKENDS if n not in _MODULES or importlib.util.find_spec(_MODULES[n]) is not None]
-
-
-def get_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE, device: str = "cpu") -> LinearSolver:
-    """The backend called ``name`` (see module doc); ``tolerance`` (m) is the iterative backends' stopping rule.
-
-    ``device="gpu"``: ``cg-jacobi``, or ``auto`` with its conjugate gradient, on a CUDA GPU through CuPy
-    (:func:`srdda.backends.conjugate_gradient.gpu_solver`; ``RunSettings.resolved_device`` chooses).
-    """
-    if name not in _BACKENDS:
-        raise ValueError(f"unknown solver {name!r}; choose one of {sorted(_BACKENDS)}")
-    if device == "gpu":
-        from .backends.conjugate_gradient import gpu_solver
-
-        return gpu_solver(name, tolerance)
-    if device != "cpu":
-        raise ValueError(f"unknown device {device!r} for a solver; choose 'cpu' or 'gpu'")
-    if name not in available_solvers():
-        raise ValueError(f"solver {name!r} is not installed (pip install srdda[{name}])")
-    return _BACKENDS[name](tolerance) if name in _ITERATIVE else _BACKENDS[name]()
+register_solver("dense", lambda tolerance: DenseSolver())
+register_solver("superlu", lambda tolerance: SuperLUSolver())
+register_solver("cholmod", lambda tolerance: CholmodSolver(), requires="sksparse")
+register_solver("pardiso", lambda tolerance: PardisoSolver(), requires="pypardiso")

@@ -2,7 +2,7 @@
 
 The iteration, its stopping rule (every unknown within ``solver_tolerance``, estimated through the
 smallest Ritz value), its warm start and its errors are those of the CPU's ``cg-jacobi``
-(:class:`srdda.solvers.ConjugateGradientSolver`, :func:`srdda.solvers_iterative.pcg`): this class
+(:class:`srdda.solvers.ConjugateGradientSolver`, :func:`srdda.solvers.pcg`): this class
 only puts the matrix, the preconditioner and the vectors on the backend's device.
 
 What moves to the device, per solve:
@@ -22,15 +22,17 @@ and each solve scatters the uploaded block values into CSR order there.
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import partial
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..assembly.system import BlockSystem
-from ..solvers import DEFAULT_TOLERANCE, AutoSolver, ConjugateGradientSolver, LinearSolver
-from ..solvers_iterative import BlockJacobi, PCGResult, pcg
-from .arrays import GPU_SOLVERS, ArrayBackend, cupy_backend
+from ..backends.arrays import GPU_SOLVERS, ArrayBackend, cupy_backend
+from ._auto import AutoSolver
+from ._iterative import BlockJacobi, ConjugateGradientSolver, PCGResult, pcg
+from ._registry import DEFAULT_TOLERANCE, LinearSolver, register_solver
 
 __all__ = ["ArrayConjugateGradient", "BlockPatternCSR", "block_diagonal_csr", "gpu_solver"]
 
@@ -150,3 +152,7 @@ def gpu_solver(name: str, tolerance: float = DEFAULT_TOLERANCE, backend: ArrayBa
                          f"{', '.join(GPU_SOLVERS)}")
     iterative = ArrayConjugateGradient(cupy_backend() if backend is None else backend, tolerance)
     return iterative if name == "cg-jacobi" else AutoSolver(tolerance, iterative=iterative)
+
+
+for _name in GPU_SOLVERS:
+    register_solver(_name, partial(gpu_solver, _name), device="gpu")
