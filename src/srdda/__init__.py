@@ -12,6 +12,7 @@ post-adjusted rotations (``dda1``) and SRDDA (``srdda``). SI units throughout.
 True
 """
 from . import threads as _threads  # first: how numba's threads wait, before they start (srdda.threads)
+from ._version import __version__
 from .constraints import MotionHistory, hinge_forces
 from .constraints.water import TensionCrack, WaterTable
 from .history import TimeHistory
@@ -32,9 +33,7 @@ from .geometry.jointsets2d import JointSet, circular_opening, joint_traces, poly
 from .cutmodel import add_cut_blocks, add_cut_polyhedra
 from .geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
 from .geometry.jointsets3d import JointPlanes, JointSet3D, joint_planes
-from .fos import FactorOfSafety, FailureCriterion, factor_of_safety
-
-__version__ = "0.1.0"
+from .apps.fos import FactorOfSafety, FailureCriterion, factor_of_safety
 
 __all__ = [
     "METHODS", "ContactSet", "JointMaterial", "Load", "Material", "Method", "Model", "ModelError",

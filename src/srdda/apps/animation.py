@@ -1,7 +1,7 @@
 """Animations of a results file: GIF (Pillow, always there) or MP4 (ffmpeg, optional).
 
 2D runs are drawn with matplotlib; 3D runs are rendered frame by frame with
-pyvista off-screen (:mod:`srdda.render3d`), else with matplotlib's 3D axes.
+pyvista off-screen (:mod:`srdda.apps.render3d`), else with matplotlib's 3D axes.
 
 MP4 needs an ffmpeg executable: the one on PATH, or the one the optional
 extra ``pip install srdda[mp4]`` (imageio-ffmpeg) brings. Without it an
@@ -22,7 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib import animation, cm, colors as mcolors  # noqa: E402
 
-from .io.results_store import StoredResult, read_results  # noqa: E402
+from ..io.results_store import StoredResult, read_results  # noqa: E402
 from .render3d import pyvista_renders, render_blocks  # noqa: E402
 from .plotting import (block_values, history, plot_blocks, plot_solid_blocks, quantity_label,  # noqa: E402
                        solid_faces, solid_limits, step_title)

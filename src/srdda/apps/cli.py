@@ -20,21 +20,21 @@ import numpy as np
 from pydantic import ValidationError
 from tqdm import tqdm
 
-from . import __version__
-from .backends.arrays import DEVICES, GpuUnavailable, cupy_backend, gpu_problem
-from .integrators.methods import METHODS
+from .._version import __version__
+from ..backends.arrays import DEVICES, GpuUnavailable, cupy_backend, gpu_problem
+from ..integrators.methods import METHODS
 from .cli_results import (animate_command, history_command, plot_command, prepare_resume_run, report_paper,
                           vtk_command)
-from .io.convert import convert
-from .io.modelfile import ModelFileError, format_validation, load_model, read_model_text
-from .io.results_store import OutputExistsError, ResultsStore, ResultsWriteError, read_results
+from ..io.convert import convert
+from ..io.modelfile import ModelFileError, format_validation, load_model, read_model_text
+from ..io.results_store import OutputExistsError, ResultsStore, ResultsWriteError, read_results
 from .paper import EXAMPLES, relative_error, run_example
-from .model import Model, ModelArrays, ModelError
-from .results import Result
-from .settings import RunSettings
-from .simulation import run
-from .solvers import available_solvers, get_solver
-from .step import Stepper
+from ..model import Model, ModelArrays, ModelError
+from ..results import Result
+from ..settings import RunSettings
+from ..simulation import run
+from ..solvers import available_solvers, get_solver
+from ..step import Stepper
 from .summary import format_summary, run_summary
 
 __all__ = ["main", "BadInput"]
@@ -94,7 +94,7 @@ def save_histories(results_file: Path, result: Result, out: Path) -> tuple[Path,
 
     They are read from the results file the run streamed to (every recorded
     step, not the vertices), so the run itself keeps no history in memory;
-    the summary adds :func:`srdda.summary.run_summary` of them and the final
+    the summary adds :func:`srdda.apps.summary.run_summary` of them and the final
     state. Returns the file written and the summary.
     """
     out.mkdir(parents=True, exist_ok=True)

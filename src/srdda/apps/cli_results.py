@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 from tqdm import tqdm
 
-from .io.results_store import (ResultsDamageWarning, ResultsFileError, ResultsInUseError, ResultsWriteError,
+from ..io.results_store import (ResultsDamageWarning, ResultsFileError, ResultsInUseError, ResultsWriteError,
                                Resumption, StoredResult, prepare_resume, read_results)
 
 __all__ = ["plot_command", "animate_command", "vtk_command", "history_command", "prepare_resume_run", "report_paper"]
@@ -164,7 +164,7 @@ def _block_indices(res: StoredResult, blocks: tuple[str, ...]) -> list[int]:
 
 def _stored_arrays(res: StoredResult):
     """The model arrays stored in a results file (masses, gravity, block type for per-block energies)."""
-    from .io.results_store import model_arrays_from_file
+    from ..io.results_store import model_arrays_from_file
 
     try:
         return model_arrays_from_file(res.path)
@@ -217,7 +217,7 @@ def animate_command(run: str, out: str, fps: int, frames: int, color: str, quiet
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def vtk_command(run: str, out: str, every: int | None, quiet: bool) -> None:
     """Write ParaView files (VTU per step, PVD series) of a results file RUN: blocks, contacts, bolts."""
-    from .io.vtk import default_every, series_rows, write_vtu_series
+    from ..io.vtk import default_every, series_rows, write_vtu_series
 
     res = _read(run)
     _writable(Path(out), folder=True)

@@ -24,10 +24,10 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .model import JointTable, Model, ModelArrays, ModelError
-from .settings import RunSettings
-from .simulation import run_single
-from .step import shi_step_bound
+from ..model import JointTable, Model, ModelArrays, ModelError
+from ..settings import RunSettings
+from ..simulation import run_single
+from ..step import shi_step_bound
 
 __all__ = ["FailureCriterion", "FactorOfSafety", "FosError", "Trial", "factor_of_safety", "reduce_strength",
            "settle_displacements", "settle_dt", "judge", "rest_threshold", "try_factor"]

@@ -1,8 +1,8 @@
 """A model drawn before it runs (``srdda show``): blocks by material, joints, supports, bolts, measured points.
 
-2D models are drawn with matplotlib on :func:`srdda.plotting.fig_configuration`'s
+2D models are drawn with matplotlib on :func:`srdda.apps.plotting.fig_configuration`'s
 symbols; 3D models are rendered with pyvista off-screen
-(:mod:`srdda.render3d`), or with matplotlib's 3D axes where pyvista cannot
+(:mod:`srdda.apps.render3d`), or with matplotlib's 3D axes where pyvista cannot
 render. Every symbol has a legend entry.
 """
 from __future__ import annotations
@@ -18,7 +18,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from . import plotting  # noqa: E402
-from .model import Model, ModelArrays  # noqa: E402
+from ..model import Model, ModelArrays  # noqa: E402
 from .render3d import pyvista_renders, render_blocks  # noqa: E402
 
 __all__ = ["fig_model_setup", "material_colors"]

@@ -37,9 +37,10 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from .results import removed_blocks  # noqa: E402
+from ..model import Model  # noqa: E402
+from ..results import removed_blocks  # noqa: E402
 
-__all__ = ["history", "quantity_names", "components", "block_values", "method_label", "plot_blocks",
+__all__ = ["history", "quantity_names", "components", "block_values", "method_label", "plot_blocks", "fixed_blocks",
            "fig_configuration",
            "fig_model", "fig_solid_model", "step_title", "plot_solid_blocks", "solid_faces", "solid_limits",
            "fig_trajectories", "fig_time_series", "plot_bolts", "fig_bolt_forces",
@@ -211,6 +212,17 @@ def plot_blocks(ax: plt.Axes, vertices: np.ndarray, block_ptr: np.ndarray, value
     ax.autoscale_view()
     ax.set_aspect("equal")
     return coll
+
+
+def fixed_blocks(model: Model) -> tuple[np.ndarray, np.ndarray] | None:
+    """Vertices and pointer of the fixed blocks (slope, ground) to draw behind paths."""
+    a = model.arrays()
+    keep = np.flatnonzero(a.block_fixed)
+    if len(keep) == 0:
+        return None
+    counts = np.diff(a.block_ptr)[keep]
+    verts = np.concatenate([a.vertices[a.block_ptr[b]:a.block_ptr[b + 1]] for b in keep])
+    return verts, np.concatenate([[0], np.cumsum(counts)])
 
 
 def block_values(res: Results, index: int, color: str | None) -> np.ndarray | None:
@@ -434,7 +446,7 @@ def solid_limits(ax: Any, points: np.ndarray) -> None:
 def fig_solid_model(res: Results, index: int = -1, color: str | None = "speed", trails: bool = True) -> Figure:
     """3D blocks at recorded step ``index`` (their faces), with the measured points' paths so far.
 
-    Rendered with pyvista off-screen (:mod:`srdda.render3d`), else with matplotlib's 3D axes.
+    Rendered with pyvista off-screen (:mod:`srdda.apps.render3d`), else with matplotlib's 3D axes.
     """
     from matplotlib import cm, colors as mcolors
 

@@ -6,7 +6,7 @@ without a display: VTK's EGL (or OSMesa) window when there is no X server
 (docs/results.md, *3D pictures*). :func:`pyvista_renders` says whether this
 machine can (checked once per process by rendering a tiny scene); where it
 cannot (no pyvista, no OpenGL library), or where ``SRDDA_3D_RENDERER=matplotlib``
-is set, the figure functions of :mod:`srdda.plotting` draw with matplotlib's
+is set, the figure functions of :mod:`srdda.apps.plotting` draw with matplotlib's
 3D axes instead: slower, and faces may overlap wrongly, but always there.
 """
 from __future__ import annotations

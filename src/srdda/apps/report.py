@@ -1,7 +1,7 @@
 """The paper report: run the paper's examples, write Markdown and HTML with every table and figure.
 
 Everything in the report comes from runs made by :func:`make_report` itself
-(never from stored numbers): each example of :mod:`srdda.paper` is built and
+(never from stored numbers): each example of :mod:`srdda.apps.paper` is built and
 run under each method, each run is written to ``DIR/runs/<example>_<method>.h5``
 (a results file: ``srdda plot``/``animate``/``vtk`` work on it), the example's
 ``tables(results)`` rows are laid out ours beside the paper's, and its figures
@@ -33,13 +33,15 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from . import __version__, plotting  # noqa: E402
-from .integrators.methods import METHODS  # noqa: E402
-from .io.results_store import ResultsStore  # noqa: E402
-from .model import Model  # noqa: E402
-from .results import Result  # noqa: E402
-from .settings import RunSettings  # noqa: E402
-from .simulation import run  # noqa: E402
+from .._version import __version__  # noqa: E402
+from . import plotting  # noqa: E402
+from ..integrators.methods import METHODS  # noqa: E402
+from ..io.results_store import ResultsStore  # noqa: E402
+from ..model import Model  # noqa: E402
+from ..results import Result  # noqa: E402
+from ..settings import RunSettings  # noqa: E402
+from ..simulation import run  # noqa: E402
+from .markup import CSS, html_table, md_table  # noqa: E402
 from .ensemble.report import paper_report_section  # noqa: E402
 
 __all__ = ["ExampleRun", "FIGURES", "register_figures", "run_examples", "write_report", "make_report",
@@ -80,17 +82,6 @@ class ExampleRun:
 def _pivot(model: Model) -> np.ndarray:
     arrays = model.arrays()
     return arrays.points[arrays.fixed_rows[0]] if len(arrays.fixed_rows) else np.zeros(2)
-
-
-def _fixed_blocks(model: Model) -> tuple[np.ndarray, np.ndarray] | None:
-    """Vertices and pointer of the fixed blocks (slope, ground) to draw behind paths."""
-    a = model.arrays()
-    keep = np.flatnonzero(a.block_fixed)
-    if len(keep) == 0:
-        return None
-    counts = np.diff(a.block_ptr)[keep]
-    verts = np.concatenate([a.vertices[a.block_ptr[b]:a.block_ptr[b + 1]] for b in keep])
-    return verts, np.concatenate([[0], np.cumsum(counts)])
 
 
 def _balance_summary(results: dict[str, Result]) -> str:
@@ -194,7 +185,7 @@ def _nunchaku(results: dict[str, Result], model: Model) -> FigureList:
 def _rockfall(results: dict[str, Result], model: Model) -> FigureList:
     return [("Fig. 15: trajectories of P1 (centroid, blue) and P2 (vertex, red) (x, y in m) over the fixed slope "
              "(grey) by (a) DDA0, (b) DDA1, (c) SRDDA.",
-             plotting.fig_rockfall(results, background=_fixed_blocks(model)))]
+             plotting.fig_rockfall(results, background=plotting.fixed_blocks(model)))]
 
 
 def _generic(results: dict[str, Result], model: Model) -> FigureList:
@@ -367,20 +358,6 @@ def _machine() -> str:
             f"numpy {np.__version__}, srdda {__version__}")
 
 
-def _md_table(header: list[str], body: list[list[str]]) -> str:
-    def cell(s: str) -> str:
-        return s.replace("|", "\\|")
-    lines = ["| " + " | ".join(cell(h) for h in header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(cell(c) for c in row) + " |" for row in body]
-    return "\n".join(lines)
-
-
-def _html_table(header: list[str], body: list[list[str]]) -> str:
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
-    rows = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in body)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
-
-
 def _runs_table(run_: ExampleRun) -> tuple[list[str], list[list[str]]]:
     header = ["method", "status", "recorded steps (count)", "last step (step)", "wall time (s)", "results file"]
     body = []
@@ -389,12 +366,6 @@ def _runs_table(run_: ExampleRun) -> tuple[list[str], list[list[str]]]:
                      f"{run_.wall_seconds.get(m, float('nan')):.2f}",
                      str(run_.files[m].name) if m in run_.files else ""])
     return header, body
-
-
-CSS = ("body{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em}"
-       "table{border-collapse:collapse;margin:1em 0;font-size:90%}"
-       "td,th{border:1px solid #bbb;padding:3px 6px;text-align:right}th{background:#eee}"
-       "td:first-child{text-align:left}img{max-width:100%}.err{color:#a00}figcaption{font-size:90%}")
 
 
 def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str | None = None,
@@ -420,18 +391,18 @@ def write_report(directory: str | Path, runs: Sequence[ExampleRun], command: str
             md += [run_.notes, ""]
             hb.append(f"<p>{html.escape(run_.notes)}</p>")
         if run_.inputs is not None:
-            md += ["### Inputs", "", _md_table(*run_.inputs), ""]
-            hb.append(f"<h3>Inputs</h3>{_html_table(*run_.inputs)}")
+            md += ["### Inputs", "", md_table(*run_.inputs), ""]
+            hb.append(f"<h3>Inputs</h3>{html_table(*run_.inputs)}")
         header, body = _runs_table(run_)
-        md += [_md_table(header, body), ""]
-        hb.append(_html_table(header, body))
+        md += [md_table(header, body), ""]
+        hb.append(html_table(header, body))
         for err in run_.errors:
             md += [f"**Error:** {err}", ""]
             hb.append(f"<p class='err'>Error: {html.escape(err)}</p>")
         for table, rows in _tables(run_).items():
             header, body = pivot_table(rows, methods)
-            md += [f"### {table}", "", _md_table(header, body), ""]
-            hb.append(f"<h3>{html.escape(table)}</h3>{_html_table(header, body)}")
+            md += [f"### {table}", "", md_table(header, body), ""]
+            hb.append(f"<h3>{html.escape(table)}</h3>{html_table(header, body)}")
         for i, (caption, fig) in enumerate(run_.figures):
             png = _png(fig)
             name = f"{run_.name}_{i + 1}.png"

@@ -16,11 +16,11 @@ from typing import Any
 
 import numpy as np
 
-from .contact.openclose import LOCKED, OPEN, SLIDING
-from .kinematics.blocktype import block_type_of_dimension
-from .ledger import energy_in_play
-from .results import reference_rows
-from .state import State
+from ..contact.openclose import LOCKED, OPEN, SLIDING
+from ..kinematics.blocktype import block_type_of_dimension
+from ..ledger import energy_in_play
+from ..results import reference_rows
+from ..state import State
 
 __all__ = ["run_summary", "format_summary"]
 

@@ -5,7 +5,7 @@ As UDEC's HISTORY: every recorded step of a run (an in-memory
 :class:`~srdda.io.results_reader.StoredResult`) is a row; the columns are the
 time, the step, then each chosen block's and measured point's quantities, in
 SI units named in the header. The components and units are those of the
-figures (:func:`srdda.plotting.components`, :func:`srdda.plotting.quantity_unit`).
+figures (:func:`srdda.apps.plotting.components`, :func:`srdda.apps.plotting.quantity_unit`).
 """
 from __future__ import annotations
 

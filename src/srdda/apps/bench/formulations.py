@@ -17,15 +17,15 @@ from typing import Any
 
 import numpy as np
 
-from ..assembly.system import BlockSystem
-from ..contact.conic import StepProblem, step_problem
-from ..contact.newton import NewtonContactModel, NewtonContactStep, NewtonContactTerm
-from ..contact.pipeline import ContactParameters
-from ..model import JointMaterial, Material, Model, ModelArrays
-from ..settings import RunSettings
-from ..solvers import get_solver
-from ..state import State, initial_state
-from ..step import Stepper, contact_parameters, default_terms, model_half_height
+from ...assembly.system import BlockSystem
+from ...contact.conic import StepProblem, step_problem
+from ...contact.newton import NewtonContactModel, NewtonContactStep, NewtonContactTerm
+from ...contact.pipeline import ContactParameters
+from ...model import JointMaterial, Material, Model, ModelArrays
+from ...settings import RunSettings
+from ...solvers import get_solver
+from ...state import State, initial_state
+from ...step import Stepper, contact_parameters, default_terms, model_half_height
 
 __all__ = ["HeldTrescaStep", "held_tresca_step", "blocks_on_base", "compare", "GRAVITY"]
 

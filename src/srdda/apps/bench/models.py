@@ -26,14 +26,14 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from ..cutmodel import add_cut_polyhedra
-from ..geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
-from ..geometry.jointsets2d import JointSet, joint_traces
-from ..geometry.jointsets3d import JointSet3D, joint_planes
-from ..geometry.polyhedron import box
-from ..io.ddainput import BlockMaterialSpec, DDAInput
-from ..model import JointMaterial, Material, Model
-from ..settings import RunSettings
+from ...cutmodel import add_cut_polyhedra
+from ...geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
+from ...geometry.jointsets2d import JointSet, joint_traces
+from ...geometry.jointsets3d import JointSet3D, joint_planes
+from ...geometry.polyhedron import box
+from ...io.ddainput import BlockMaterialSpec, DDAInput
+from ...model import JointMaterial, Material, Model
+from ...settings import RunSettings
 
 __all__ = ["SLOPES", "BRICK", "SLOPE_3D", "BrickWallSpec", "Slope3DSpec", "brick_wall", "english_bond_wall",
            "english_bond_outlines", "jointed_slope", "jointed_slope_3d", "slope_3d_cut", "slope_input"]

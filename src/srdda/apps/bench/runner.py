@@ -1,6 +1,6 @@
 """``srdda bench``: run the standard models for a fixed number of steps and time them.
 
-Each model runs in a fresh Python process (``python -m srdda.bench.runner``),
+Each model runs in a fresh Python process (``python -m srdda.apps.bench.runner``),
 so that its peak memory (:func:`peak_memory_mb`) is its own and one
 model's numba compilation, caches or leaks do not bias the next. The child
 prints one JSON row; the parent collects the rows and prints them.
@@ -52,14 +52,14 @@ from typing import Any
 
 import numpy as np
 
-from .. import simulation
-from ..assembly.system import BlockSystem
-from ..contact.pipeline import ContactModel, ContactStep
-from ..model import Model
-from ..settings import RunSettings
-from ..step import Stepper
-from ..solvers import DEFAULT_TOLERANCE
-from ..term import CUT_CAUSES
+from ... import simulation
+from ...assembly.system import BlockSystem
+from ...contact.pipeline import ContactModel, ContactStep
+from ...model import Model
+from ...settings import RunSettings
+from ...step import Stepper
+from ...solvers import DEFAULT_TOLERANCE
+from ...term import CUT_CAUSES
 from .models import brick_wall, english_bond_wall, jointed_slope, jointed_slope_3d
 
 __all__ = ["BenchCase", "CASES", "QUICK", "REQUIRED_KEYS", "run_cases", "format_table"]
@@ -313,7 +313,7 @@ def run_cases(names: list[str], steps: int | None, quick: bool, method: str, dt:
         n = steps if steps is not None else (case.quick_steps if quick else case.steps)
         if progress is not None:
             progress(name)
-        cmd = [sys.executable, "-m", "srdda.bench.runner", name, "--steps", str(n), "--method", method,
+        cmd = [sys.executable, "-m", "srdda.apps.bench.runner", name, "--steps", str(n), "--method", method,
                "--timeout", str(timeout), "--device", device] + ([] if dt is None else ["--dt", repr(dt)]) \
             + ([] if contact_solver is None else ["--contact-solver", contact_solver])
         try:

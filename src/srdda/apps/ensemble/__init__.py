@@ -7,8 +7,8 @@ them in the base model, :func:`run_one` runs one sample and measures it,
 and writes the tables, summary, figures and report.
 """
 from .runner import EnsembleRun, run_ensemble, run_one
-from .sampling import ApplyError, apply_values, sample
-from .spec import EnsembleSpec, SpecError, load_spec
+from .sampling import ApplyError, apply_values, load_spec, sample
+from .spec import EnsembleSpec, SpecError
 
 __all__ = ["EnsembleRun", "EnsembleSpec", "SpecError", "ApplyError", "load_spec", "sample", "apply_values",
            "run_one", "run_ensemble"]

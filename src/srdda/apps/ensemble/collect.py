@@ -25,9 +25,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..geometry.ground import Ground
-from ..model import ModelArrays
-from ..state import State, mass_density
+from ...geometry.ground import Ground
+from ...model import ModelArrays
+from ...state import State, mass_density
 from .spec import Collector, StopRule
 
 __all__ = ["RockfallRecorder", "SettleRule", "COLLECTOR_FIELDS"]

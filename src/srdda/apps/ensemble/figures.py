@@ -17,8 +17,7 @@ import numpy as np  # noqa: E402
 import pyarrow as pa  # noqa: E402
 
 from .. import plotting  # noqa: E402
-from ..io.modelfile import model_from_dict  # noqa: E402
-from ..report import _fixed_blocks  # noqa: E402
+from ...io.modelfile import model_from_dict  # noqa: E402
 from .spec import EnsembleSpec  # noqa: E402
 
 __all__ = ["ensemble_figures"]
@@ -96,7 +95,7 @@ def _trajectories(base: dict[str, Any], runs: pa.Table, trajectories: pa.Table, 
     up = "z" if dim == 3 else "y"
     if dim == 2:
         model, _ = model_from_dict(base, "base model")
-        background = _fixed_blocks(model)
+        background = plotting.fixed_blocks(model)
         if background is not None:
             plotting.plot_blocks(ax, background[0], background[1], facecolor="0.85", edgecolor="0.4")
     run_ids = trajectories.column("run").to_numpy()

@@ -2,7 +2,7 @@
 
 :func:`write_ensemble_report` writes it alone as ``report.md``/``report.html``
 in the ensemble's folder; :func:`paper_report_section` appends it to the paper
-report (:func:`srdda.report.write_report`) when an ensemble was run into the
+report (:func:`srdda.apps.report.write_report`) when an ensemble was run into the
 report's ``ensemble/`` folder (``srdda ensemble SPEC --out REPORT/ensemble``).
 """
 from __future__ import annotations
@@ -12,6 +12,8 @@ import html
 import json
 from pathlib import Path
 from typing import Any
+
+from ..markup import CSS, html_table, md_table
 
 __all__ = ["ensemble_section", "write_ensemble_report", "paper_report_section"]
 
@@ -25,8 +27,6 @@ def _g(x: float) -> str:
 def ensemble_section(doc: dict[str, Any], figures: list[tuple[str, Path]], dim: int,
                      prefix: str = "") -> tuple[list[str], list[str]]:
     """Markdown lines and HTML parts of the section; figure links in Markdown are ``prefix + figures/NAME``."""
-    from ..report import _html_table, _md_table
-
     energy = "J/m" if dim == 2 else "J"
     title = f"Probabilistic rockfall: {doc['title']}" if doc["title"] else "Probabilistic rockfall"
     r = doc["runout"]
@@ -46,8 +46,8 @@ def ensemble_section(doc: dict[str, Any], figures: list[tuple[str, Path]], dim: 
     md = [f"## {title}", "", intro, ""]
     hb = [f"<h2>{html.escape(title)}</h2><p>{html.escape(intro)}</p>"]
     if body:
-        md += [_md_table(header, body), ""]
-        hb.append(_html_table(header, body))
+        md += [md_table(header, body), ""]
+        hb.append(html_table(header, body))
     for caption, path in figures:
         md += [f"![{caption}]({prefix}figures/{path.name})", "", f"*{caption}*", ""]
         data = base64.b64encode(path.read_bytes()).decode("ascii")
@@ -58,8 +58,6 @@ def ensemble_section(doc: dict[str, Any], figures: list[tuple[str, Path]], dim: 
 
 def write_ensemble_report(out: Path, doc: dict[str, Any], figures: list[tuple[str, Path]], dim: int) -> None:
     """``report.md`` and a self-contained ``report.html`` holding the ensemble's section alone."""
-    from ..report import CSS
-
     md, hb = ensemble_section(doc, figures, dim)
     (out / "report.md").write_text("\n".join(md), encoding="utf-8")
     (out / "report.html").write_text("<!doctype html><html><head><meta charset='utf-8'><title>srdda ensemble"

@@ -2,7 +2,7 @@
 
 :func:`run_one` is the task: it draws run ``i``'s sample, builds the model
 from the sampled model-file dictionary, runs it with the spec's stop rule and
-a :class:`~srdda.ensemble.collect.RockfallRecorder`, and returns a plain
+a :class:`~srdda.apps.ensemble.collect.RockfallRecorder`, and returns a plain
 dictionary (any error of the sample is caught and returned as a failed run).
 :func:`run_ensemble` submits the runs that have no file yet to a
 ``distributed.LocalCluster`` (one single-threaded worker process per core) or
@@ -27,12 +27,12 @@ from typing import Any
 
 from tqdm import tqdm
 
-from ..io.modelfile import model_from_dict
-from ..io.outputlock import release_lock, take_lock
-from ..simulation import run
+from ...io.modelfile import model_from_dict
+from ...io.outputlock import release_lock, take_lock
+from ...simulation import run
 from .collect import RockfallRecorder, SettleRule
-from .sampling import apply_values, sample, tracked_block
-from .spec import EnsembleSpec, SpecError, load_spec
+from .sampling import apply_values, load_spec, sample, tracked_block
+from .spec import EnsembleSpec, SpecError
 
 __all__ = ["run_one", "run_ensemble", "EnsembleRun", "read_run_files", "dask_client"]
 
@@ -185,7 +185,7 @@ def run_ensemble(spec_path: str | Path, out: str | Path, runs: int | None = None
 def _run_held(spec: EnsembleSpec, base: dict[str, Any], out: Path, workers: int | None, scheduler: str | None,
               progress: bool, processes: bool, start: float) -> EnsembleRun:
     """:func:`run_ensemble` once ``out`` is held."""
-    from .tables import write_outputs
+    from .tables import write_outputs  # pyarrow: imported when the tables are written
 
     _claim(out, spec, base)
     done = read_run_files(out, spec.runs)
@@ -208,5 +208,5 @@ def _run_held(spec: EnsembleSpec, base: dict[str, Any], out: Path, workers: int 
                 failed += record["status"] != "ok"
                 bar.update(1)
                 bar.set_postfix(failed=failed, remaining=spec.runs - bar.n)
-    write_outputs(out, spec, base)
+    write_outputs(out, spec, base, [r for _, r in sorted(read_run_files(out, spec.runs).items())])
     return EnsembleRun(spec, out, len(todo), len(done), failed, time.perf_counter() - start)

@@ -1,4 +1,4 @@
-"""Samples of an ensemble and how a sample is applied to the base model.
+"""Samples of an ensemble, how a sample is applied to the base model, and the spec read and checked by applying one.
 
 Run ``i``'s values come from ``numpy.random.default_rng([seed, i])`` alone (a
 SeedSequence of the spec's seed and the run index), drawn in the order of the
@@ -15,13 +15,17 @@ from __future__ import annotations
 import copy
 import math
 import re
+import tomllib
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
-from .spec import BLOCK_SHORTCUTS, Choice, EnsembleSpec, LogNormal, Normal, Uniform
+from ...io.modelfile import ModelFileError, format_validation, model_from_dict, read_model_text
+from .spec import BLOCK_SHORTCUTS, Choice, EnsembleSpec, LogNormal, Normal, SpecError, Uniform
 
-__all__ = ["ApplyError", "sample", "apply_values", "set_path", "tracked_block"]
+__all__ = ["ApplyError", "sample", "apply_values", "set_path", "tracked_block", "load_spec"]
 
 
 class ApplyError(ValueError):
@@ -191,3 +195,44 @@ def apply_values(base: dict[str, Any], spec: EnsembleSpec, values: dict[str, flo
         except ApplyError as exc:
             raise ApplyError(f"{where}: {exc}") from None
     return data
+
+
+def load_spec(path: str | Path, runs: int | None = None) -> tuple[EnsembleSpec, dict[str, Any]]:
+    """Read and check a spec and its base model: the spec (``runs`` overriding its count) and the model's dict.
+
+    The base model is validated (one :class:`SpecError` naming the model file
+    and the field) and every parameter is applied once to it with its base
+    value, so a wrong path or reference is found before any run starts.
+    """
+    p = Path(path)
+    try:
+        data = tomllib.loads(read_model_text(p))
+    except ModelFileError as exc:
+        raise SpecError(str(exc).replace("model file", "spec file")) from None
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:
+        raise SpecError(f"{p}: not valid TOML ({exc})") from None
+    if runs is not None:
+        data["runs"] = runs
+    try:
+        spec = EnsembleSpec.model_validate(data)
+    except ValidationError as exc:
+        raise SpecError(format_validation(exc, str(p), "invalid ensemble spec")) from None
+    model_path = (p.parent / spec.model)
+    try:
+        base = tomllib.loads(read_model_text(model_path))
+        model, _ = model_from_dict(base, str(model_path))
+    except ModelFileError as exc:
+        raise SpecError(f"{p}: model: {exc}") from None
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:
+        raise SpecError(f"{p}: model: {model_path}: not valid TOML ({exc})") from None
+    try:
+        apply_values(base, spec, sample(spec, 0))
+    except ApplyError as exc:
+        raise SpecError(f"{p}: {exc}") from None
+    dim = len(model.blocks[0].vertices[0])
+    for c in spec.all_collectors(dim):
+        if len(c.at) != dim:
+            raise SpecError(f"{p}: collector {c.name!r}: 'at' and 'normal' need {dim} coordinates (a {dim}D model)")
+    if spec.stop.domain is not None and len(spec.stop.domain[0]) != dim:
+        raise SpecError(f"{p}: stop.domain: needs {dim} coordinates per corner (a {dim}D model)")
+    return spec, base

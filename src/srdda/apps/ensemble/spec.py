@@ -8,15 +8,12 @@ is in docs/ensembles.md.
 from __future__ import annotations
 
 import math
-import tomllib
-from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..io.modelfile import ModelFileError, format_validation, model_from_dict, read_model_text
 
-__all__ = ["SpecError", "EnsembleSpec", "Parameter", "Collector", "StopRule", "SHORTCUTS", "load_spec"]
+__all__ = ["SpecError", "EnsembleSpec", "Parameter", "Collector", "StopRule", "SHORTCUTS"]
 
 
 class SpecError(ValueError):
@@ -159,46 +156,3 @@ class EnsembleSpec(_Strict):
         pad = [0.0] * (dim - 1)
         return [Collector(name=f"x={x:g}", at=[x, *pad], normal=[1.0, *pad]) for x in self.stations] \
             + list(self.collectors)
-
-
-def load_spec(path: str | Path, runs: int | None = None) -> tuple[EnsembleSpec, dict[str, Any]]:
-    """Read and check a spec and its base model: the spec (``runs`` overriding its count) and the model's dict.
-
-    The base model is validated (one :class:`SpecError` naming the model file
-    and the field) and every parameter is applied once to it with its base
-    value, so a wrong path or reference is found before any run starts.
-    """
-    from .sampling import ApplyError, apply_values, sample
-
-    p = Path(path)
-    try:
-        data = tomllib.loads(read_model_text(p))
-    except ModelFileError as exc:
-        raise SpecError(str(exc).replace("model file", "spec file")) from None
-    except (tomllib.TOMLDecodeError, RecursionError) as exc:
-        raise SpecError(f"{p}: not valid TOML ({exc})") from None
-    if runs is not None:
-        data["runs"] = runs
-    try:
-        spec = EnsembleSpec.model_validate(data)
-    except ValidationError as exc:
-        raise SpecError(format_validation(exc, str(p), "invalid ensemble spec")) from None
-    model_path = (p.parent / spec.model)
-    try:
-        base = tomllib.loads(read_model_text(model_path))
-        model, _ = model_from_dict(base, str(model_path))
-    except ModelFileError as exc:
-        raise SpecError(f"{p}: model: {exc}") from None
-    except (tomllib.TOMLDecodeError, RecursionError) as exc:
-        raise SpecError(f"{p}: model: {model_path}: not valid TOML ({exc})") from None
-    try:
-        apply_values(base, spec, sample(spec, 0))
-    except ApplyError as exc:
-        raise SpecError(f"{p}: {exc}") from None
-    dim = len(model.blocks[0].vertices[0])
-    for c in spec.all_collectors(dim):
-        if len(c.at) != dim:
-            raise SpecError(f"{p}: collector {c.name!r}: 'at' and 'normal' need {dim} coordinates (a {dim}D model)")
-    if spec.stop.domain is not None and len(spec.stop.domain[0]) != dim:
-        raise SpecError(f"{p}: stop.domain: needs {dim} coordinates per corner (a {dim}D model)")
-    return spec, base

@@ -22,7 +22,6 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .collect import COLLECTOR_FIELDS
-from .runner import read_run_files
 from .spec import EnsembleSpec
 
 __all__ = ["model_dimension", "runs_table", "collectors_table", "trajectories_table", "summary", "write_outputs",
@@ -158,13 +157,14 @@ def _write_atomic(path: Path, write: Any) -> None:
     os.replace(tmp, path)
 
 
-def write_outputs(out: Path, spec: EnsembleSpec, base: dict[str, Any]) -> dict[str, Any]:
-    """Assemble the run files of ``out`` into its tables, summary, figures and report; returns the summary."""
-    from .figures import ensemble_figures
+def write_outputs(out: Path, spec: EnsembleSpec, base: dict[str, Any],
+                  records: list[dict[str, Any]]) -> dict[str, Any]:
+    """Assemble the run files of ``out`` (``records``, by index) into its tables, summary, figures and report;
+    returns the summary."""
+    from .figures import ensemble_figures  # matplotlib: imported when the figures are drawn
     from .report import write_ensemble_report
 
     dim = model_dimension(base)
-    records = [r for _, r in sorted(read_run_files(out, spec.runs).items())]
     runs, collectors = runs_table(spec, records, dim), collectors_table(spec, records, dim)
     trajectories = trajectories_table(records, dim)
     for name, table in (("runs", runs), ("collectors", collectors), ("trajectories", trajectories)):

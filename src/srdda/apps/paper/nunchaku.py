@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import Material, Model
-from ..results import Result
-from ..settings import RunSettings
+from ...model import Material, Model
+from ...results import Result
+from ...settings import RunSettings
 from .registry import Example, Row, register
 
 __all__ = ["NUNCHAKU", "build", "tables", "hinge_distance", "PAPER_TABLE5"]

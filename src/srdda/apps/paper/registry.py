@@ -16,9 +16,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from ..model import Model
-from ..results import Result
-from ..settings import RunSettings
+from ...model import Model
+from ...results import Result
+from ...settings import RunSettings
 
 __all__ = ["Example", "EXAMPLES", "register", "get_example", "examples_dir", "Row"]
 
@@ -57,7 +57,7 @@ class Example:
         """The model and run settings of this example for ``method``."""
         if self.builder is not None:
             return self.builder(method)
-        from ..io.modelfile import load_model
+        from ...io.modelfile import load_model
 
         path = examples_dir() / "paper" / str(self.model_file)
         model, settings = load_model(path)

@@ -25,9 +25,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import JointMaterial, Material, Model
-from ..results import Result
-from ..settings import RunSettings
+from ...model import JointMaterial, Material, Model
+from ...results import Result
+from ...settings import RunSettings
 from .registry import Example, Row, register
 
 __all__ = ["build", "tables", "slope_profile", "contact_events", "ROCKFALL"]

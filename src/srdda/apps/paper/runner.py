@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-from ..results import Result
-from ..simulation import run
+from ...results import Result
+from ...simulation import run
 from .registry import Row, get_example
 
 __all__ = ["run_example", "relative_error"]

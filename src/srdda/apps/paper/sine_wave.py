@@ -35,10 +35,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..constraints import MotionHistory
-from ..model import Material, Model
-from ..results import Result
-from ..settings import RunSettings
+from ...constraints import MotionHistory
+from ...model import Material, Model
+from ...results import Result
+from ...settings import RunSettings
 from .registry import Example, Row, register
 
 __all__ = ["SINE_WAVE", "build", "tables", "wave_periods", "profile_periods", "chain_reference",

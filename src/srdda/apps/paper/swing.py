@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..results import Result
+from ...results import Result
 from .registry import Example, Row, register
 
 __all__ = ["PENDULUM", "ROD", "pendulum_tables", "rod_tables"]

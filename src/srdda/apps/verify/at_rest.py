@@ -14,11 +14,11 @@ from dataclasses import replace
 import numpy as np
 
 from ..bench.models import brick_wall
-from ..cases.slope3d import wedge_friction_for, wedge_model
-from ..model import Model
-from ..settings import RunSettings
-from ..simulation import run
-from ..stages import Stage
+from .cases.slope3d import wedge_friction_for, wedge_model
+from ...model import Model
+from ...settings import RunSettings
+from ...simulation import run
+from ...stages import Stage
 from .cases2d import INCLINE_PENALTY, STICKING_ANGLE, _completed, incline_model_2d
 from .registry import Row, case, row
 

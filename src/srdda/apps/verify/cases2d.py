@@ -4,14 +4,14 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..assembly.blocks import mass_matrices
-from ..kinematics.blocktype import PLANE
-from ..model import JointMaterial, Material, Model
+from ...assembly.blocks import mass_matrices
+from ...kinematics.blocktype import PLANE
+from ...model import JointMaterial, Material, Model
 from ..paper import get_example
 from ..paper.nunchaku import build as build_nunchaku, hinge_distance
-from ..results import Result
-from ..settings import RunSettings
-from ..simulation import run
+from ...results import Result
+from ...settings import RunSettings
+from ...simulation import run
 from .registry import Row, case, row
 
 __all__: list[str] = []

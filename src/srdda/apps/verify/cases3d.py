@@ -1,4 +1,4 @@
-"""The 3D verification cases (issue 12): srdda.cases.solid runs them, this module reports them.
+"""The 3D verification cases (issue 12): srdda.apps.verify.cases.solid runs them, this module reports them.
 
 Tolerances, each with what it measures:
 """
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cases.solid import (Measured, conical_pendulum_case, extruded_case, intermediate_axis_case, spin_case,
+from .cases.solid import (Measured, conical_pendulum_case, extruded_case, intermediate_axis_case, spin_case,
                            uniaxial_case)
 from .registry import Row, case, row
 

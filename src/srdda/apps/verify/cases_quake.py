@@ -12,13 +12,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..constraints.bolts import bolt_forces
-from ..history import TimeHistory
-from ..io.records import SYNTHETIC_RECORD, record_history
-from ..model import JointMaterial, Material, Model
-from ..results import Result
-from ..settings import RunSettings
-from ..simulation import run
+from ...constraints.bolts import bolt_forces
+from ...history import TimeHistory
+from ...io.records import SYNTHETIC_RECORD, record_history
+from ...model import JointMaterial, Material, Model
+from ...results import Result
+from ...settings import RunSettings
+from ...simulation import run
 from .registry import Row, case, row
 
 __all__ = ["newmark_sliding", "newmark_model", "bolted_block_model", "bolt_requirement"]

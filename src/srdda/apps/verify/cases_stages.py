@@ -5,7 +5,7 @@ the unbalanced-force ratio 1e-5, and the vertical stress at every block's centro
 (h: the depth of the centroid below the top). ``stage-excavation-2d`` / ``-3d``: after an equilibrium
 stage, a stage that removes the block under another makes it fall at g from the stage's start.
 ``stage-wedge-cut-3d``: the wedge above a cut slope of examples/stages/wedge-cut.toml
-(:func:`srdda.cases.slope3d.wedge_cut_model`): after the toe is cut it stays at FS 1.2 and, its joints
+(:func:`srdda.apps.verify.cases.slope3d.wedge_cut_model`): after the toe is cut it stays at FS 1.2 and, its joints
 weakened, slides at Hoek & Bray's a = g sin ψ_i (1 − FS) at FS 0.8.
 """
 from __future__ import annotations
@@ -14,12 +14,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..cases.slope3d import WEDGE_PLANES, wedge_cut_model, wedge_solution
-from ..model import JointMaterial, Material, Model
-from ..results import Result
-from ..settings import RunSettings
-from ..simulation import run
-from ..stages import Stage
+from .cases.slope3d import WEDGE_PLANES, wedge_cut_model, wedge_solution
+from ...model import JointMaterial, Material, Model
+from ...results import Result
+from ...settings import RunSettings
+from ...simulation import run
+from ...stages import Stage
 from .registry import Row, case, row
 
 __all__ = ["stacked_column"]

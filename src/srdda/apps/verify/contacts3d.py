@@ -1,4 +1,4 @@
-"""The 3D contact verification cases (issue 13): srdda.cases.contacts3d runs them, this module reports them.
+"""The 3D contact verification cases (issue 13): srdda.apps.verify.cases.contacts3d runs them, this module reports them.
 
 Each tolerance is given beside its case with what it measures (docs/verification.md).
 """
@@ -8,11 +8,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..cases.contacts3d import drop_case, incline_case
-from ..cases.slope3d import (SLIDE_TOPPLE_CASES, WEDGE_PLANES, SlideToppleCase, incline_acceleration,
+from .cases.contacts3d import drop_case, incline_case
+from .cases.slope3d import (SLIDE_TOPPLE_CASES, WEDGE_PLANES, SlideToppleCase, incline_acceleration,
                              slide_topple_model, wedge_friction_for, wedge_model, wedge_solution)
-from ..settings import RunSettings
-from ..simulation import run
+from ...settings import RunSettings
+from ...simulation import run
 from .cases2d import INCLINE_PENALTY, incline_model_2d
 from .registry import Row, case, row
 
@@ -129,7 +129,7 @@ def extruded_incline_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 
 
 # ---------------------------------------------------------------------------------------------
-# slide-topple-3d: the four blocks of srdda.cases.slope3d.SLIDE_TOPPLE_CASES (one per region of the
+# slide-topple-3d: the four blocks of srdda.apps.verify.cases.slope3d.SLIDE_TOPPLE_CASES (one per region of the
 # sliding / toppling chart: ψ = 30°, φ = 40° or 20°, b × h = 1 × 1 or 0.3 × 1 m, 1 m wide) on a fixed
 # slab dipping 30° (real inclined geometry), k_n = 1e10 N/m, 500 steps of 1 ms. A block slid when its
 # down-dip base edge (the toppling pivot) moved more than 0.1 mm along the dip, toppled when it turned
@@ -174,7 +174,7 @@ def slide_topple_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 
 
 # ---------------------------------------------------------------------------------------------
-# wedge-3d: the tetrahedral wedge of srdda.cases.slope3d.wedge_model (joint planes 40°/130° and 60°/220°,
+# wedge-3d: the tetrahedral wedge of srdda.apps.verify.cases.slope3d.wedge_model (joint planes 40°/130° and 60°/220°,
 # slope face 70°/160°, a horizontal top 6 m above the daylight point) on two fixed joint-plane blocks,
 # friction giving FS = 1.2 and 0.8 by the limit-equilibrium wedge solution (Hoek & Bray 1981, ch. 8),
 # k_n = 1e11 N/m, Δt = 1 ms.

@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cases.plane_failure import PLANE_FAILURE, plane_failure_model
-from ..cases.slope3d import (WEDGE_PLANES, hoek_bray_wedge_angles, hoek_bray_wedge_factor_of_safety, wedge_friction_for,
+from .cases.plane_failure import PLANE_FAILURE, plane_failure_model
+from .cases.slope3d import (WEDGE_PLANES, hoek_bray_wedge_angles, hoek_bray_wedge_factor_of_safety, wedge_friction_for,
                              wedge_model, wedge_solution, wedge_water_forces, wet_wedge_factor_of_safety)
 from ..fos import FactorOfSafety, factor_of_safety, try_factor
-from ..model import JointMaterial, Model
-from ..settings import RunSettings
+from ...model import JointMaterial, Model
+from ...settings import RunSettings
 from .registry import Row, case, row
 from .water import contact_water_forces, crack_water_force
 
@@ -47,7 +47,7 @@ def _fos_rows(name: str, label: str, model: Model, settings: RunSettings, exact:
 
 
 # ---------------------------------------------------------------------------------------------
-# fos-plane-2d: Hoek & Bray's plane failure (srdda.cases.plane_failure: a 12 m slope, face 60°, sliding plane
+# fos-plane-2d: Hoek & Bray's plane failure (srdda.apps.verify.cases.plane_failure: a 12 m slope, face 60°, sliding plane
 # 30° daylighting at the toe, a dry tension crack where the weight's line of action meets the middle of
 # the plane, c = 20 kPa, φ = 25°: FS = 1.2092). The block is 100 × stiffer than the contacts (E = 1e12 Pa,
 # k_n = 1e10 N/m): the bond is lost where a contact slides, so an elastic block whose strain loads one end
@@ -68,7 +68,7 @@ def fos_plane_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 
 
 # ---------------------------------------------------------------------------------------------
-# fos-wedge-3d: the wedge of wedge-3d (srdda.cases.slope3d.wedge_model: planes 40/130 and 60/220, face 70/160)
+# fos-wedge-3d: the wedge of wedge-3d (srdda.apps.verify.cases.slope3d.wedge_model: planes 40/130 and 60/220, face 70/160)
 # with the friction of FS 1.2 by Hoek & Bray's wedge solution, dry, no cohesion; k_n = 1e11 N/m.
 # Information row: the same wedge with c = 5 kPa, φ = 25° on both planes against Hoek & Bray's short solution
 # (FS 1.036): a 3D joint's cohesion acts at the corner contacts of the wedge's faces and is lost contact by
@@ -95,7 +95,7 @@ def fos_wedge_3d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 
 
 # ---------------------------------------------------------------------------------------------
-# fos-plane-wet-2d: fos-plane-2d's slope with Hoek & Bray's water (srdda.cases.plane_failure.set_hoek_bray_water):
+# fos-plane-wet-2d: fos-plane-2d's slope with Hoek & Bray's water (srdda.apps.verify.cases.plane_failure.set_hoek_bray_water):
 # the tension crack filled to its top, z_w = 1.663 m (the most water their model puts in this slope), the
 # phreatic line from the crack's water surface to the toe: U = ½γ_w·z_w·A = 168.6 kN/m, V = ½γ_w·z_w² =
 # 13.6 kN/m, FS 1.2092 dry → 1.1170 wet (−7.6 %). The model's water forces at the start equal U and V: the
@@ -128,7 +128,7 @@ def fos_plane_wet_2d(methods: tuple[str, ...], quick: bool) -> list[Row]:
 # ---------------------------------------------------------------------------------------------
 # fos-wedge-wet-3d: fos-wedge-3d's wedge (friction of FS 1.2 dry) with water in its two sliding planes up to a
 # horizontal level 3 m above the toe (half the wedge's height): the wet part of each face is the triangle at the
-# toe cut by the level (srdda.cases.slope3d.wedge_water_forces: U_A = 131.4 kN, U_B = 56.3 kN), normal to its
+# toe cut by the level (srdda.apps.verify.cases.slope3d.wedge_water_forces: U_A = 131.4 kN, U_B = 56.3 kN), normal to its
 # plane, so the driving force W sin ψ_i stays and each plane carries N_i − U_i: FS 1.2 → 1.0732
 # (wet_wedge_factor_of_safety). Hoek & Bray's own distribution (zero on the outcropping edges, ½γ_w·H on the line of
 # intersection) is no plane surface. The water acts only on the joints (contacts), none on the free faces: the

@@ -1,11 +1,11 @@
 """The impact verification cases (issue 29, item 7): the rebound speed ratio of a collinear frictionless impact
-on a joint with a normal restitution e_n against e_n itself, 2D and 3D (srdda.cases.impacts runs them).
+on a joint with a normal restitution e_n against e_n itself, 2D and 3D (srdda.apps.verify.cases.impacts runs them).
 
 Each tolerance is given beside its case with what it measures (docs/verification.md).
 """
 from __future__ import annotations
 
-from ..cases.impacts import impact_case
+from .cases.impacts import impact_case
 from .registry import Row, case, row
 
 __all__: list[str] = []

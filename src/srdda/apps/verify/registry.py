@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from ..integrators.methods import METHODS
+from ...integrators.methods import METHODS
 
 __all__ = ["Case", "CASES", "Row", "case", "row", "run_case", "UnknownCaseError", "expected_seconds",
            "EXPECTED_SECONDS"]

@@ -6,23 +6,23 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..cases.plane_failure import (BASE_LENGTH, PLANE_DIP, plane_failure_acceleration, plane_failure_factor,
+from .cases.plane_failure import (BASE_LENGTH, PLANE_DIP, plane_failure_acceleration, plane_failure_factor,
                                    set_hoek_bray_water, wet_plane_forces, wet_plane_model)
-from ..constraints.water import UNIT_WEIGHT, WaterCrackTerm, contact_water
-from ..contact.pipeline import ContactModel
-from ..contact.record import ContactRecord
-from ..geometry.facets import boundary_simplices
-from ..model import JointMaterial, Material, Model, ModelArrays
-from ..results import Result
-from ..settings import RunSettings
-from ..simulation import run
-from ..step import contact_parameters, model_half_height
+from ...constraints.water import UNIT_WEIGHT, WaterCrackTerm, contact_water
+from ...contact.pipeline import ContactModel
+from ...contact.record import ContactRecord
+from ...geometry.facets import boundary_simplices
+from ...model import JointMaterial, Material, Model, ModelArrays
+from ...results import Result
+from ...settings import RunSettings
+from ...simulation import run
+from ...step import contact_parameters, model_half_height
 from .registry import Row, case, row
 
 __all__: list[str] = []
 
 # ---------------------------------------------------------------------------------------------
-# water-plane-2d / -3d: the block of srdda.cases.plane_failure (L = 2 m base on a 30° incline, 1 m high
+# water-plane-2d / -3d: the block of srdda.apps.verify.cases.plane_failure (L = 2 m base on a 30° incline, 1 m high
 # vertical faces, the back one the crack's, 2500 kg/m³, g = 10) with joint friction 40°: dry FS = 1.45; wet
 # (a phreatic surface 0.6 m above the incline, the crack full: U = 11,772 N/m, V = 4905 N/m) FS = 0.754,
 # sliding; a little water (0.05 m, the crack 0.2 m deep) FS = 1.40, at rest. (With 0.1 m of water the 3D
@@ -48,7 +48,7 @@ PLANE_ACCELERATION = 1e-4
 PLANE_AT_REST = 1e-4  # m
 
 
-# Hoek & Bray's water on the same block (srdda.cases.plane_failure.set_hoek_bray_water: the crack 1 m deep, the
+# Hoek & Bray's water on the same block (srdda.apps.verify.cases.plane_failure.set_hoek_bray_water: the crack 1 m deep, the
 # phreatic line from its water surface to the toe): at the start the uplift is ½γ_w·z_w·L and the crack's force
 # ½γ_w·z_w², an identity of the contacts' shares of the wetted faces' exact integrals (the base's and the crack's):
 # round-off (measured 0 in 2D, 1.9e-16 in 3D).

@@ -2,7 +2,7 @@
 
 * incline: a 1 × 1 × 0.5 m box on a fixed plane dipping ψ towards an
   azimuth that is not a coordinate axis, joint friction φ. φ < ψ: it slides
-  with a = g (sin ψ − cos ψ tan φ) (:func:`srdda.cases.slope3d.incline_acceleration`);
+  with a = g (sin ψ − cos ψ tan φ) (:func:`srdda.apps.verify.cases.slope3d.incline_acceleration`);
   φ > ψ: it stays.
 * drop: a 0.5 m cube dropped on a fixed base at an orientation, thrown
   sideways and spinning; the energy ledger's balance (stored energies plus
@@ -14,12 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry.polyhedron import box
-from ..kinematics.shape3d import rotation_matrix_3d
-from ..model import JointMaterial, Material, Model
-from ..results import Result
-from ..settings import RunSettings
-from ..simulation import run
+from srdda.geometry.polyhedron import box
+from srdda.kinematics.shape3d import rotation_matrix_3d
+from srdda.model import JointMaterial, Material, Model
+from srdda.results import Result
+from srdda.settings import RunSettings
+from srdda.simulation import run
 from .slope3d import G
 
 __all__ = ["incline_model", "incline_case", "InclineRun", "drop_model", "drop_case"]

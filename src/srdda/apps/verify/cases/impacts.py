@@ -18,9 +18,9 @@ from typing import Literal
 
 import numpy as np
 
-from ..model import JointMaterial, Material, Model
-from ..settings import RunSettings
-from ..simulation import run
+from srdda.model import JointMaterial, Material, Model
+from srdda.settings import RunSettings
+from srdda.simulation import run
 
 __all__ = ["impact_model", "ImpactRun", "impact_case", "IMPACT_PENALTY"]
 

@@ -34,9 +34,9 @@ from dataclasses import dataclass
 
 from scipy.optimize import brentq
 
-from ..constraints.water import UNIT_WEIGHT
-from ..geometry.polygon import BlockMoments, block_moments
-from ..model import JointMaterial, Material, Model
+from srdda.constraints.water import UNIT_WEIGHT
+from srdda.geometry.polygon import BlockMoments, block_moments
+from srdda.model import JointMaterial, Material, Model
 
 __all__ = ["plane_failure_factor", "plane_failure_acceleration", "wet_plane_model", "wet_plane_forces",
            "set_hoek_bray_water", "PlaneFailure", "PLANE_FAILURE", "plane_failure_water_forces", "plane_failure_model",

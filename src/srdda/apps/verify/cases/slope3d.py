@@ -40,12 +40,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..constraints.water import UNIT_WEIGHT
-from ..geometry.cutting3d import halfspace_polyhedron
-from ..geometry.jointsets3d import plane_normal
-from ..geometry.polyhedron import box
-from ..model import JointMaterial, Material, Model
-from ..stages import Stage
+from srdda.constraints.water import UNIT_WEIGHT
+from srdda.geometry.cutting3d import halfspace_polyhedron
+from srdda.geometry.jointsets3d import plane_normal
+from srdda.geometry.polyhedron import box
+from srdda.model import JointMaterial, Material, Model
+from srdda.stages import Stage
 
 __all__ = ["G", "HoekBrayAngles", "hoek_bray_wedge_angles", "hoek_bray_wedge_factor_of_safety",
            "wedge_vertices", "wedge_faces", "wedge_water_forces", "wet_wedge_factor_of_safety", "SLIDE_TOPPLE_CASES",

@@ -10,13 +10,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..geometry.polyhedron import box, prism
-from ..io.modelfile import load_model
-from ..kinematics.shape3d import rotation_matrix_3d, skew
-from ..model import Material, Model
-from ..paper.registry import examples_dir
-from ..settings import RunSettings
-from ..simulation import run
+from srdda.geometry.polyhedron import box, prism
+from srdda.io.modelfile import load_model
+from srdda.kinematics.shape3d import rotation_matrix_3d, skew
+from srdda.model import Material, Model
+from ...paper.registry import examples_dir
+from srdda.settings import RunSettings
+from srdda.simulation import run
 
 __all__ = ["Measured", "spin_case", "intermediate_axis_case", "extruded_case", "conical_pendulum_case",
            "uniaxial_case", "T_SECTION"]
