@@ -13,6 +13,7 @@ True
 """
 from . import threads as _threads  # first: how numba's threads wait, before they start (srdda.threads)
 from ._version import __version__
+from . import _aliases
 from .constraints import MotionHistory, hinge_forces
 from .constraints.water import TensionCrack, WaterTable
 from .history import TimeHistory
@@ -34,6 +35,8 @@ from .cutmodel import add_cut_blocks, add_cut_polyhedra
 from .geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
 from .geometry.jointsets3d import JointPlanes, JointSet3D, joint_planes
 from .apps.fos import FactorOfSafety, FailureCriterion, factor_of_safety
+
+_aliases.install()  # the module paths of srdda 0.1 that moved (srdda.cli, srdda.verify, ...), for one release
 
 __all__ = [
     "METHODS", "ContactSet", "JointMaterial", "Load", "Material", "Method", "Model", "ModelError",
