@@ -201,7 +201,8 @@ def test_a_lowered_table_changes_the_run():
 def test_contacts_on_a_crack_take_the_cracks_water_not_the_tables():
     """A closed crack (the block against a fixed block behind it): its contacts get no pressure of the phreatic
     surface, the crack's faces the crack's water; the sliding plane's contacts the surface's."""
-    from srdda.constraints.water import contact_water, crack_facets
+    from srdda.constraints.water import crack_facets
+    from srdda.contact.water import contact_water
     from srdda.contact.pipeline import ContactModel
     from srdda.geometry.facets import boundary_simplices
     from srdda.step import contact_parameters, model_half_height
@@ -246,7 +247,7 @@ def test_a_wedge_gets_the_water_on_each_plane(level):
     wetted integral, checked against shapely above), though a slab's corner also touches the wedge's face
     (its bond is left out: one side per joint)."""
     from srdda.apps.verify.cases.slope3d import wedge_model
-    from srdda.constraints.water import contact_water
+    from srdda.contact.water import contact_water
     from srdda.contact.pipeline import ContactModel
     from srdda.geometry.facets import area_vectors, boundary_simplices
     from srdda.step import contact_parameters, model_half_height

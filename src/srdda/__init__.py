@@ -25,7 +25,7 @@ from .results import Result
 from .settings import RunSettings
 from .simulation import run
 from .stages import Stage
-from .equilibrium import Settled, settle
+from .staging import Settled, settle
 from .state import State
 from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume

@@ -1,4 +1,5 @@
-"""The run of a staged analysis: the stages of :mod:`srdda.stages` one after the other, in one run.
+"""The run of a staged analysis: the stages of :mod:`srdda.stages` one after the other, in one run; and
+:func:`settle`, a model brought to rest under its loads as an equilibrium stage is.
 
 :func:`run_stages` begins each stage from the state the one before ended in
 (its changes applied, :func:`begin_stage`), runs it with
@@ -12,13 +13,14 @@ the checkpoint is in, bit for bit.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .equilibrium import SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, unbalanced_force, without_ratio
-from .model import ModelArrays
+from .equilibrium import (RATIO_TOLERANCE, SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, unbalanced_force,
+                          without_ratio)
+from .model import Model, ModelArrays
 from .results import Result
 from .settings import RunSettings
 from .simulation import run_single
@@ -30,7 +32,7 @@ if TYPE_CHECKING:
     from .contact.law import ContactLaw
     from .results import Recorder
 
-__all__ = ["begin_stage", "stage_settings", "StageTerm", "run_stages"]
+__all__ = ["begin_stage", "stage_settings", "StageTerm", "run_stages", "Settled", "settle"]
 
 
 def begin_stage(base: ModelArrays, index: int, state: State, before: StageMark) -> tuple[ModelArrays, State]:
@@ -57,7 +59,7 @@ def begin_stage(base: ModelArrays, index: int, state: State, before: StageMark) 
 def stage_settings(settings: RunSettings, plan: StagePlan, mark: StageMark, state: State) -> RunSettings:
     """The run settings of the rest of a stage from ``state``: the model's with the stage's, its length
     counted from the stage's start (an equilibrium stage: ``max_steps``, in the damped steps of
-    :func:`srdda.equilibrium.settle` unless the stage gives ``velocity_ratio``)."""
+    :func:`settle` unless the stage gives ``velocity_ratio``)."""
     chosen = replace(settings, **{k: v for k, v in plan.run.items() if k not in ("n_steps", "end_time")})
     if plan.kind == "equilibrium":
         if "velocity_ratio" not in plan.run:
@@ -198,3 +200,44 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
         sink.finish(status, state)
     return result
 
+
+@dataclass(frozen=True)
+class Settled:
+    """What :func:`settle` reached: the last state, its ratio, the steps taken and whether it got below the
+    tolerance; ``status`` is the run's (``completed``, or why it stopped)."""
+
+    state: State
+    ratio: float
+    steps: int
+    reached: bool
+    status: str
+
+
+def settle(model: Model | ModelArrays, settings: RunSettings, state: State | None = None,
+           tolerance: float = RATIO_TOLERANCE, max_steps: int = 20000,
+           velocity_ratio: float | None = SETTLE_VELOCITY_RATIO,
+           recorders: Sequence[Recorder] = (), extra_terms: Sequence[Term] = (),
+           contact_law: ContactLaw | None = None, progress: Callable[[int], None] | None = None) -> Settled:
+    """Bring ``model`` to rest under its loads from ``state`` (default: its initial state).
+
+    Damped dynamic steps (``velocity_ratio``, 0.8 by default; 0 is Shi's static mode, None keeps the
+    settings') until the unbalanced-force ratio (:mod:`srdda.equilibrium`) falls below ``tolerance`` or ``max_steps``
+    steps are taken. ``settings`` give Δt, the method and the contact model; their steps and end time
+    are replaced by ``max_steps``. ``recorders``, ``extra_terms`` and ``contact_law`` are those of
+    :func:`srdda.simulation.run`. Returns the last state, the ratio it reached, the steps taken and
+    whether the ratio fell below ``tolerance``.
+    """
+    arrays = model.arrays() if isinstance(model, Model) else model
+    chosen = replace(settings, n_steps=max_steps, end_time=None)
+    if velocity_ratio is not None:
+        chosen = replace(chosen, velocity_ratio=velocity_ratio)
+    start = state.step if state is not None else 0
+    state = without_ratio(state) if state is not None else None
+    result = run_single(arrays, chosen, progress=progress, state=state, recorders=recorders, keep_history=False,
+                        stop=lambda s: reached(s, tolerance), extra_terms=[*extra_terms, UnbalancedForceTerm()],
+                        contact_law=contact_law)
+    final = result.final_state
+    assert final is not None
+    carried = unbalanced_force(final)
+    ratio = carried.ratio if carried is not None else float("nan")
+    return Settled(final, ratio, final.step - start, carried is not None and ratio < tolerance, result.status)

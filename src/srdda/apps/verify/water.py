@@ -8,9 +8,10 @@ import numpy as np
 
 from .cases.plane_failure import (BASE_LENGTH, PLANE_DIP, plane_failure_acceleration, plane_failure_factor,
                                    set_hoek_bray_water, wet_plane_forces, wet_plane_model)
-from ...constraints.water import UNIT_WEIGHT, WaterCrackTerm, contact_water
+from ...constraints.water import UNIT_WEIGHT, WaterCrackTerm
 from ...contact.pipeline import ContactModel
 from ...contact.record import ContactRecord
+from ...contact.water import contact_water
 from ...geometry.facets import boundary_simplices
 from ...model import JointMaterial, Material, Model, ModelArrays
 from ...results import Result
