@@ -1,4 +1,4 @@
-"""The architecture: the dimension seam and the layers below the step.
+"""The architecture: the dimension seam, the layers below the step, the engine below the applications.
 
 Walks the source (AST) of the engine modules and fails where an integer
 literal 2, 3, 6 or 12 (the 2D/3D point sizes and unknown counts) picks
@@ -6,6 +6,10 @@ columns (``x[:, 2]``, ``x[:, 3:]``), or sizes an array (``np.zeros((n, 2))``,
 ``reshape(-1, 6)``, ``np.eye(2)``), and on the 2D unknown count ``NDOF``
 imported outside ``kinematics/``. What depends on the dimension belongs to the
 block type (``srdda.kinematics.blocktype``) or to geometry.
+
+Walks every import of every module (at the top, inside functions, under
+``TYPE_CHECKING``) and fails on an import circle and on an engine module
+importing ``srdda.apps`` (docs/architecture.md, *Layout*).
 """
 from __future__ import annotations
 

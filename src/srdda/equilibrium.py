@@ -1,4 +1,4 @@
-"""Equilibrium: the unbalanced-force ratio of a step, and bringing a model to rest under its loads.
+"""Equilibrium: the unbalanced-force ratio of a step, the measure of a model brought to rest under its loads.
 
 What "unbalanced force" means for a DDA block. A step solves the block's
 equilibrium with its inertial force: M·a + (elastic, contact, constraint
