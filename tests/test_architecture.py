@@ -328,7 +328,8 @@ def test_the_documented_new_term_works():
 
 def test_old_module_paths_import_with_a_deprecation_warning():
     # a fresh interpreter: every old path (and a module inside an old package) is the new module itself, and
-    # its first import warns once, naming the new path; `from srdda import verify` and `python -m srdda` work
+    # its first import warns once, naming the new path; `from srdda import paper`, `python -m srdda` and
+    # `python -m srdda.cli` work
     import json
     import subprocess
     import sys
@@ -361,5 +362,6 @@ print(json.dumps({old: imported(old) for old in names}))
         name, messages = out[old]
         assert name == new
         assert len(messages) == 1 and messages[0].startswith(f"{old} has moved to {PUBLIC.get(new, new)};")
-    assert subprocess.run([sys.executable, "-m", "srdda", "--version"], capture_output=True, text=True,
-                          check=True).stdout.startswith("srdda, version")
+    for module in ("srdda", "srdda.cli"):  # the command line, and its old module run as a script
+        assert subprocess.run([sys.executable, "-m", module, "--version"], capture_output=True, text=True,
+                              check=True).stdout.startswith("srdda, version")

@@ -13,7 +13,7 @@ import importlib.abc
 import importlib.machinery
 import sys
 import warnings
-from types import ModuleType
+from types import CodeType, ModuleType
 
 __all__ = ["MOVED", "new_name", "install"]
 
@@ -47,11 +47,19 @@ class _Alias(importlib.abc.Loader):
     def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType | None:
         return None  # a placeholder, replaced in exec_module
 
+    def _warn(self, old: str) -> None:
+        warnings.warn(f"{old} has moved to {PUBLIC.get(self.target, self.target)}; import it from there (the old "
+                      "path goes in the next release)", DeprecationWarning, stacklevel=3)
+
     def exec_module(self, module: ModuleType) -> None:
-        shown = PUBLIC.get(self.target, self.target)
-        warnings.warn(f"{module.__name__} has moved to {shown}; import it from there (the old path goes in the "
-                      "next release)", DeprecationWarning, stacklevel=2)
+        self._warn(module.__name__)
         sys.modules[module.__name__] = importlib.import_module(self.target)
+
+    def get_code(self, fullname: str) -> CodeType:
+        """What ``python -m OLD`` runs: the new module as ``__main__`` (``python -m srdda.cli``)."""
+        self._warn(fullname)
+        return compile(f"import runpy\nrunpy.run_module({self.target!r}, run_name='__main__', alter_sys=True)\n",
+                       fullname, "exec")
 
 
 class _Finder(importlib.abc.MetaPathFinder):
