@@ -232,8 +232,6 @@ TOLERATED = {
     ("srdda.model", "srdda.constraints.checks"): "Model.arrays() checks the compiled ModelArrays",
     ("srdda.model", "srdda.constraints.water"): "ModelArrays holds a WaterTable; Model.arrays() checks the cracks",
     ("srdda.model", "srdda.stages"): "ModelArrays holds StagePlans that Model.arrays() resolves against the Model",
-    ("srdda.simulation", "srdda.staging"): "run() hands a model with stages to run_stages, which runs each "
-                                           "stage by run_single",
 }
 # Outside srdda/apps but not the engine, so they may import the apps: the public facade (it re-exports
 # factor_of_safety), ``python -m srdda`` (the command line) and the aliases of the old module paths.

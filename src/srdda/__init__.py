@@ -23,9 +23,8 @@ from .integrators import METHODS, Method, TimeScheme, method_preset
 from .model import JointMaterial, Load, Material, Model, ModelError
 from .results import Result
 from .settings import RunSettings
-from .simulation import run
+from .simulation import Settled, run, settle
 from .stages import Stage
-from .staging import Settled, settle
 from .state import State
 from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume

@@ -22,7 +22,7 @@ no part. A model with no applied force has the ratio inf while anything is
 unbalanced (0 otherwise).
 
 :class:`UnbalancedForceTerm` computes it at every step and carries it in
-``State.carried["equilibrium"]`` (so a checkpoint keeps it); :func:`srdda.staging.settle`
+``State.carried["equilibrium"]`` (so a checkpoint keeps it); :func:`srdda.simulation.settle`
 runs a model in damped dynamic steps (Shi's velocity ratio: the velocity at
 the end of each step is multiplied by :data:`SETTLE_VELOCITY_RATIO` = 0.8
 before the next) until the ratio falls below a tolerance (default 1e-5) or a

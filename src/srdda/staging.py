@@ -1,9 +1,8 @@
-"""The run of a staged analysis: the stages of :mod:`srdda.stages` one after the other, in one run; and
-:func:`settle`, a model brought to rest under its loads as an equilibrium stage is.
+"""The run of a staged analysis: the stages of :mod:`srdda.stages` one after the other, in one run.
 
 :func:`run_stages` begins each stage from the state the one before ended in
 (its changes applied, :func:`begin_stage`), runs it with
-:func:`srdda.simulation.run_single` under its settings (:func:`stage_settings`;
+``run_stage`` (:func:`srdda.simulation.run_single`) under its settings (:func:`stage_settings`;
 an equilibrium stage until the unbalanced-force ratio of :mod:`srdda.equilibrium`
 falls below its tolerance) and tells the recorders each stage's begin and end
 (the stage table of the results file). The stage mark rides in the state
@@ -13,17 +12,15 @@ the checkpoint is in, bit for bit.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .equilibrium import (RATIO_TOLERANCE, SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, unbalanced_force,
-                          without_ratio)
-from .model import Model, ModelArrays
+from .equilibrium import SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, unbalanced_force, without_ratio
+from .model import ModelArrays
 from .results import Result
 from .settings import RunSettings
-from .simulation import run_single
 from .stages import CARRIED, CHANGES, StageMark, StagePlan, at_rest, initial_mark, stage_arrays, stage_mark
 from .state import State, initial_state
 from .term import Term
@@ -32,7 +29,7 @@ if TYPE_CHECKING:
     from .contact.law import ContactLaw
     from .results import Recorder
 
-__all__ = ["begin_stage", "stage_settings", "StageTerm", "run_stages", "Settled", "settle"]
+__all__ = ["begin_stage", "stage_settings", "StageTerm", "run_stages"]
 
 
 def begin_stage(base: ModelArrays, index: int, state: State, before: StageMark) -> tuple[ModelArrays, State]:
@@ -59,7 +56,7 @@ def begin_stage(base: ModelArrays, index: int, state: State, before: StageMark) 
 def stage_settings(settings: RunSettings, plan: StagePlan, mark: StageMark, state: State) -> RunSettings:
     """The run settings of the rest of a stage from ``state``: the model's with the stage's, its length
     counted from the stage's start (an equilibrium stage: ``max_steps``, in the damped steps of
-    :func:`settle` unless the stage gives ``velocity_ratio``)."""
+    :func:`srdda.simulation.settle` unless the stage gives ``velocity_ratio``)."""
     chosen = replace(settings, **{k: v for k, v in plan.run.items() if k not in ("n_steps", "end_time")})
     if plan.kind == "equilibrium":
         if "velocity_ratio" not in plan.run:
@@ -136,12 +133,14 @@ def _ended(entry: dict[str, Any], plan: StagePlan, state: State, status: str) ->
 def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[int], None] | None = None,
                state: State | None = None, recorders: Sequence[Recorder] = (), keep_history: bool = True,
                keep_vertices: bool = True, extra_terms: Sequence[Term] = (),
-               contact_law: ContactLaw | None = None, stop: Callable[[State], bool] | None = None) -> Result:
+               contact_law: ContactLaw | None = None, stop: Callable[[State], bool] | None = None, *,
+               run_stage: Callable[..., Result]) -> Result:
     """Run the stages of ``arrays`` (``arrays.stages``) one after the other from ``state`` (default: the initial
     state; a state of a staged run, e.g. a checkpoint, continues in the stage it carries).
 
     Arguments as :func:`srdda.simulation.run`; ``settings`` are the model's, each stage's changing them
-    (:func:`stage_settings`). Returns one :class:`Result` of the whole run, ``result.stages`` the stage
+    (:func:`stage_settings`). ``run_stage`` runs one stage: :func:`srdda.simulation.run_single`, whose
+    module calls this one (so this module does not import it). Returns one :class:`Result` of the whole run, ``result.stages`` the stage
     table (first step, start time, end, ratio reached). The run stops at the first stage that does not
     complete (diverged, or Δt below its minimum), with that stage's status. ``stop(state)``, called after
     every accepted step of the dynamic stages, ends the whole run (completed) when it returns True.
@@ -178,10 +177,10 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
             else:
                 ends = (lambda s, tol=plan.tolerance: reached(s, tol)) if plan.kind == "equilibrium" \
                     else (user_stop if stop is not None else None)
-                part = run_single(stage_arrays_, chosen, progress=progress, state=state, recorders=[sinks],
-                                  keep_history=False, stop=ends, keep_vertices=False,
-                                  extra_terms=[*extra_terms, UnbalancedForceTerm(), StageTerm(mark)],
-                                  contact_law=contact_law)
+                part = run_stage(stage_arrays_, chosen, progress=progress, state=state, recorders=[sinks],
+                                 keep_history=False, stop=ends, keep_vertices=False,
+                                 extra_terms=[*extra_terms, UnbalancedForceTerm(), StageTerm(mark)],
+                                 contact_law=contact_law)
                 assert part.final_state is not None
                 state, stage_status = part.final_state, part.status
             sinks.stage(mark.index, _ended(entry, plan, state, stage_status))
@@ -199,45 +198,3 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
     for sink in sinks.sinks:
         sink.finish(status, state)
     return result
-
-
-@dataclass(frozen=True)
-class Settled:
-    """What :func:`settle` reached: the last state, its ratio, the steps taken and whether it got below the
-    tolerance; ``status`` is the run's (``completed``, or why it stopped)."""
-
-    state: State
-    ratio: float
-    steps: int
-    reached: bool
-    status: str
-
-
-def settle(model: Model | ModelArrays, settings: RunSettings, state: State | None = None,
-           tolerance: float = RATIO_TOLERANCE, max_steps: int = 20000,
-           velocity_ratio: float | None = SETTLE_VELOCITY_RATIO,
-           recorders: Sequence[Recorder] = (), extra_terms: Sequence[Term] = (),
-           contact_law: ContactLaw | None = None, progress: Callable[[int], None] | None = None) -> Settled:
-    """Bring ``model`` to rest under its loads from ``state`` (default: its initial state).
-
-    Damped dynamic steps (``velocity_ratio``, 0.8 by default; 0 is Shi's static mode, None keeps the
-    settings') until the unbalanced-force ratio (:mod:`srdda.equilibrium`) falls below ``tolerance`` or ``max_steps``
-    steps are taken. ``settings`` give Δt, the method and the contact model; their steps and end time
-    are replaced by ``max_steps``. ``recorders``, ``extra_terms`` and ``contact_law`` are those of
-    :func:`srdda.simulation.run`. Returns the last state, the ratio it reached, the steps taken and
-    whether the ratio fell below ``tolerance``.
-    """
-    arrays = model.arrays() if isinstance(model, Model) else model
-    chosen = replace(settings, n_steps=max_steps, end_time=None)
-    if velocity_ratio is not None:
-        chosen = replace(chosen, velocity_ratio=velocity_ratio)
-    start = state.step if state is not None else 0
-    state = without_ratio(state) if state is not None else None
-    result = run_single(arrays, chosen, progress=progress, state=state, recorders=recorders, keep_history=False,
-                        stop=lambda s: reached(s, tolerance), extra_terms=[*extra_terms, UnbalancedForceTerm()],
-                        contact_law=contact_law)
-    final = result.final_state
-    assert final is not None
-    carried = unbalanced_force(final)
-    ratio = carried.ratio if carried is not None else float("nan")
-    return Settled(final, ratio, final.step - start, carried is not None and ratio < tolerance, result.status)
