@@ -35,8 +35,8 @@ import numpy as np
 import scipy
 
 from srdda.assembly.system import BlockSystem
-from srdda.bench.models import brick_wall
-from srdda.bench.runner import peak_memory_mb
+from srdda.apps.bench.models import brick_wall
+from srdda.apps.bench.runner import peak_memory_mb
 from srdda.solvers import available_solvers, get_solver
 from srdda.state import initial_state
 from srdda.step import Stepper

@@ -1,6 +1,6 @@
 """The step's contact problem by Newton (formulation a) and by clarabel (formulation c), side by side.
 
-Random rows of touching blocks on a fixed base (``srdda.bench.formulations.blocks_on_base``), 2D and 3D,
+Random rows of touching blocks on a fixed base (``srdda.apps.bench.formulations.blocks_on_base``), 2D and 3D,
 1, 5 and 20 blocks, ten seeds each; one step of each, the yield forces' N* held (the Tresca problem). Prints
 the medians: contacts, unknowns, Newton's solves and time for the step (assembly, solves, line searches; the
 dense solver), clarabel's interior-point iterations, its solve time and its time with cvxpy's compilation,
@@ -16,7 +16,7 @@ from itertools import groupby
 
 import numpy as np
 
-from srdda.bench.formulations import compare
+from srdda.apps.bench.formulations import compare
 
 
 def main() -> None:

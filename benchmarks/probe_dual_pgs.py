@@ -6,7 +6,7 @@ three ways:
 
 * open-close (the default solver): solves and time of the step;
 * Newton on the Tresca problem, N* of the yield forces held at the contacts' normal forces at the step's
-  start (``srdda.bench.formulations.held_tresca_step``): solves, time, its increments x_N;
+  start (``srdda.apps.bench.formulations.held_tresca_step``): solves, time, its increments x_N;
 * the same Tresca problem in its dual: with A block-diagonal (inertia, elasticity and loads couple no two
   blocks; fixed blocks have A⁻¹ = 0) the increments are x = A⁻¹(F + Gᵀλ), G the contacts' rows [n·T; e·T],
   and the forces λ minimise ½λᵀ(W + C)λ + bᵀλ over λ_n ≥ −T, |λ_t| ≤ τ, with W = c_p G A⁻¹ Gᵀ, C = diag(1/k_n,
@@ -31,8 +31,8 @@ import numpy as np
 from numba import njit
 
 from srdda import simulation
-from srdda.bench.formulations import held_tresca_step
-from srdda.bench.runner import CASES
+from srdda.apps.bench.formulations import held_tresca_step
+from srdda.apps.bench.runner import CASES
 from srdda.contact.newton import NewtonContactModel
 from srdda.contact.openclose import negligible_force
 from srdda.contact.record import match_previous

@@ -1,4 +1,4 @@
-"""The rebound speed ratio of collinear frictionless impacts (``srdda.cases.impacts``), before and after e_n.
+"""The rebound speed ratio of collinear frictionless impacts (``srdda.apps.verify.cases.impacts``), before and after e_n.
 
 Prints the tables of docs/contacts.md, "Impacts and restitution": the ratio without a restitution (Shi's
 spring) per Δt and contact solver; with e_n per Δt, 2D and 3D, pair and base, at the cases' penalty
@@ -14,7 +14,7 @@ from unittest import mock
 
 import numpy as np
 
-from srdda.cases.impacts import IMPACT_PENALTY, impact_case
+from srdda.apps.verify.cases.impacts import IMPACT_PENALTY, impact_case
 
 STEPS = (1e-4, 2.5e-4, 5e-4, 1e-3)
 RESTITUTIONS = (0.2, 0.5, 0.8, 1.0)

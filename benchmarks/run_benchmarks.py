@@ -6,7 +6,7 @@ import pathlib
 import runpy
 import sys
 
-from srdda.bench.runner import QUICK, format_table, run_cases
+from srdda.apps.bench.runner import QUICK, format_table, run_cases
 
 here = pathlib.Path(__file__).parent
 failed = []

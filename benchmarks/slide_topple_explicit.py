@@ -1,6 +1,6 @@
 """An independent check of verify's block that slides and topples: how far does its pivot slip?
 
-srdda.cases.slope3d's "slides and topples" block (b × h = 0.3 × 1 m, ψ = 30°, φ = 20°, 2600 kg/m³) in the
+srdda.apps.verify.cases.slope3d's "slides and topples" block (b × h = 0.3 × 1 m, ψ = 30°, φ = 20°, 2600 kg/m³) in the
 plane of its dip, as a rigid body on two corner contacts, integrated explicitly with a small step: penalty
 springs k_n and k_s = 0.4 k_n as srdda's (shear_ratio), Coulomb friction on a shear spring whose anchor
 follows the slip, 5 % of critical damping on the normal springs (to calm the landing), symplectic Euler.

@@ -6,8 +6,8 @@ import sys
 from pathlib import Path
 
 import srdda
-from srdda import plotting
-from srdda.animation import animate
+from srdda.apps import plotting
+from srdda.apps.animation import animate
 from srdda.io.vtk import write_vtu_series
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "out/results_demo")

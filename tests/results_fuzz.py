@@ -33,7 +33,7 @@ import numpy as np
 from click.testing import CliRunner
 
 import srdda
-from srdda.cli import main
+from srdda.apps.cli import main
 from srdda.io.modelfile import load_model
 from srdda.io.results_store import ResultsStore
 

@@ -20,18 +20,18 @@ from click.testing import CliRunner
 from pydantic import ValidationError
 
 import srdda
-from srdda import cli, simulation
+from srdda.apps import cli
+from srdda import simulation
 from srdda.assembly.system import BlockSystem
 from srdda.backends import arrays as arrays_module
-from srdda.backends import conjugate_gradient as cg_module
+from srdda.solvers import _gpu as cg_module
 from srdda.backends.arrays import (GPU_MIN_BLOCKS, ArrayBackend, GpuUnavailable, cupy_backend, gpu_problem,
                                    numpy_backend, resolve_device)
-from srdda.backends.conjugate_gradient import ArrayConjugateGradient, BlockPatternCSR, block_diagonal_csr, gpu_solver
-from srdda.bench.models import brick_wall, english_bond_wall
-from srdda.bench.runner import BenchCase, format_table, measure
+from srdda.apps.bench.models import brick_wall, english_bond_wall
+from srdda.apps.bench.runner import BenchCase, format_table, measure
 from srdda.settings import RunSettings
-from srdda.solvers import AutoSolver, ConjugateGradientSolver, SuperLUSolver, get_solver
-from srdda.solvers_iterative import BlockJacobi
+from srdda.solvers import (ArrayConjugateGradient, AutoSolver, BlockJacobi, BlockPatternCSR, ConjugateGradientSolver,
+                           SuperLUSolver, block_diagonal_csr, get_solver, gpu_solver)
 from srdda.state import initial_state
 from srdda.step import Stepper
 

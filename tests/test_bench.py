@@ -13,10 +13,10 @@ import pytest
 import shapely
 from click.testing import CliRunner
 
-from srdda.bench.models import (BRICK, SLOPE_3D, SLOPES, Slope3DSpec, brick_wall, english_bond_outlines,
+from srdda.apps.bench.models import (BRICK, SLOPE_3D, SLOPES, Slope3DSpec, brick_wall, english_bond_outlines,
                                 english_bond_wall, jointed_slope, jointed_slope_3d, slope_3d_cut, slope_input)
-from srdda.bench.runner import CASES, QUICK, REQUIRED_KEYS, BenchCase, format_table, measure
-from srdda.cli import main
+from srdda.apps.bench.runner import CASES, QUICK, REQUIRED_KEYS, BenchCase, format_table, measure
+from srdda.apps.cli import main
 from srdda.contact.pipeline import ContactModel, ContactStep
 from srdda.geometry.jointsets3d import plane_normal
 from srdda.model import Model

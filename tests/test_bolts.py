@@ -14,7 +14,7 @@ from srdda.constraints import bolt_forces
 from srdda.io.modelfile import ModelFileError, model_from_dict, model_to_dict
 from srdda.io.results_store import ResultsStore, load_checkpoint, read_results
 from srdda.io.vtk import write_vtu_series
-from srdda.plotting import fig_bolt_forces, fig_model
+from srdda.apps.plotting import fig_bolt_forces, fig_model
 
 RHO = 1000.0  # a unit square: 1000 kg per m
 MASS = RHO
@@ -197,7 +197,7 @@ def test_a_bad_bolt_is_one_error_naming_it(bolt: str, message: str):
 def test_the_model_figure_draws_the_bolts_and_the_example_loads():
     from srdda.io.modelfile import load_model
     from srdda.io.records import SYNTHETIC_RECORD, record_history
-    from srdda.plotting import fig_configuration
+    from srdda.apps.plotting import fig_configuration
 
     arrays = _bolted(4e4).arrays()
     fig = fig_configuration(arrays)

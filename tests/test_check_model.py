@@ -16,7 +16,7 @@ import pytest
 from click.testing import CliRunner
 
 import srdda
-from srdda.cli import main
+from srdda.apps.cli import main
 from srdda.io.modelfile import load_model
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 from click.testing import CliRunner
 
-from srdda.cli import main
+from srdda.apps.cli import main
 
 DATA = Path(__file__).parent / "data"
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from srdda.cli import main
+from srdda.apps.cli import main
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 

@@ -9,10 +9,10 @@ import click
 import pytest
 from click.testing import CliRunner
 
-from srdda import cli, cli_results
-from srdda.cli import main
+from srdda.apps import cli, cli_results
+from srdda.apps.cli import main
 from srdda.io.results_store import read_results
-from srdda.verify import CASES, EXPECTED_SECONDS, expected_seconds
+from srdda.apps.verify import CASES, EXPECTED_SECONDS, expected_seconds
 
 DATA = Path(__file__).parent / "data"
 MODEL = DATA / "two_blocks.toml"

@@ -16,11 +16,11 @@ from click.testing import CliRunner
 from PIL import Image
 
 import srdda
-from srdda import animation
-from srdda.cli import main
+from srdda.apps import animation
+from srdda.apps.cli import main
 from srdda.io.modelfile import load_model
 from srdda.io.results_store import load_checkpoint, read_results
-from srdda.paper import examples_dir
+from srdda.apps.paper import examples_dir
 
 ROD = examples_dir() / "paper" / "rod.toml"
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from srdda.io.modelfile import ModelFileError, load_model, model_from_dict, save_model
-from srdda.paper import examples_dir, nunchaku, sine_wave
+from srdda.apps.paper import examples_dir, nunchaku, sine_wave
 
 EXAMPLES = examples_dir() / "paper"
 USER_EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

@@ -8,7 +8,7 @@ import srdda
 import srdda.io
 import srdda.step
 from srdda import run
-from srdda.paper import nunchaku
+from srdda.apps.paper import nunchaku
 
 STICK_MASS = 2500.0 * 1.0 * 0.10  # kg per metre of thickness
 
@@ -123,7 +123,7 @@ def test_model_file_with_contacts_runs_as_the_builder(method):
     # two sticks are hinged, so their faces are no contact and neither may their g2 step limit cut
     # the step: the ω histories agree to 1e-9 rad/s (measured: identical). Before hinged pairs
     # were left out of contact they differed by up to 7.7 rad/s.
-    from srdda.paper.registry import examples_dir
+    from srdda.apps.paper.registry import examples_dir
 
     model, settings = srdda.io.load_model(examples_dir() / "paper" / "nunchaku.toml")
     assert settings.contacts

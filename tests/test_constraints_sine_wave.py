@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from srdda import run
-from srdda.paper import sine_wave
+from srdda.apps.paper import sine_wave
 
 
 @pytest.fixture(scope="module")

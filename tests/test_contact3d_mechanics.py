@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda.cases.contacts3d import incline_case
-from srdda.cases.slope3d import incline_acceleration
+from srdda.apps.verify.cases.contacts3d import incline_case
+from srdda.apps.verify.cases.slope3d import incline_acceleration
 from srdda.contact.openclose import LOCKED, OPEN, SLIDING
 from srdda.contact import ContactModel, ContactParameters, ContactSet
 from srdda.contact.openclose import next_states

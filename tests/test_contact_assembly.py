@@ -15,7 +15,7 @@ import pytest
 
 import srdda
 
-from srdda.bench.models import brick_wall, english_bond_wall
+from srdda.apps.bench.models import brick_wall, english_bond_wall
 from srdda.contact.openclose import LOCKED, OPEN, SLIDING
 from srdda.contact.penalty import directional_rows
 from srdda.contact.pipeline import ContactTerm

@@ -7,7 +7,7 @@ import pytest
 import srdda
 from srdda.contact import ContactModel, ContactParameters, ContactSet, LOCKED, SLIDING
 from srdda.model import JointMaterial
-from srdda.paper import rockfall
+from srdda.apps.paper import rockfall
 
 
 def _tumbling_drop(method, phi=30.0):
@@ -158,7 +158,7 @@ def test_a_sliding_contact_that_came_to_rest_starts_the_next_step_locked():
 
 def test_rockfall_model_file_is_the_builder_model():
     from srdda.io.modelfile import load_model
-    from srdda.paper import examples_dir
+    from srdda.apps.paper import examples_dir
 
     model, settings = load_model(examples_dir() / "paper" / "rockfall.toml")
     built, built_settings = rockfall.build("srdda")

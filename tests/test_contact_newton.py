@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from srdda import RunSettings, run
-from srdda.bench.models import jointed_slope
-from srdda.verify.cases2d import INCLINE_ACCELERATION, INCLINE_G, INCLINE_PENALTY, INCLINE_PSI, incline_model_2d
+from srdda.apps.bench.models import jointed_slope
+from srdda.apps.verify.cases2d import INCLINE_ACCELERATION, INCLINE_G, INCLINE_PENALTY, INCLINE_PSI, incline_model_2d
 
 STEPS = 300  # of 1 ms: the block slides 0.22 m, far beyond its ~1e-6 m settling into the springs
 

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from srdda.bench.formulations import BLOCK_HEIGHT, DENSITY, GRAVITY, blocks_on_base, held_tresca_step, reference_run
+from srdda.apps.bench.formulations import BLOCK_HEIGHT, DENSITY, GRAVITY, blocks_on_base, held_tresca_step, reference_run
 
 
 @pytest.mark.parametrize("dim", [2, 3])

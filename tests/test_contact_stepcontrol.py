@@ -136,7 +136,7 @@ def test_contact_settings_round_trip_through_the_model_file(tmp_path):
 
 
 def _examples():
-    from srdda.paper import examples_dir
+    from srdda.apps.paper import examples_dir
 
     return examples_dir()
 

@@ -19,7 +19,7 @@ import pytest
 from click.testing import CliRunner
 
 from srdda import run
-from srdda.cli import main
+from srdda.apps.cli import main
 from srdda.io import load_model
 from srdda.io.convert import read_dda
 from srdda.io.ddainput import DEFAULT_ANALYSIS, DDAInputError

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from srdda.cli import main
+from srdda.apps.cli import main
 from srdda.io import load_model
 from srdda.io.convert import read_dda
 from srdda.io.ddainput import DDAInputError, domain_scale

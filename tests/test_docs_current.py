@@ -36,7 +36,7 @@ def test_example_files_name_only_commands_that_exist() -> None:
     # cube-drop.toml pointed at `srdda results ... energy`, which does not exist
     import re
 
-    from srdda.cli import main
+    from srdda.apps.cli import main
 
     for path in sorted((ROOT / "examples").rglob("*.toml")):
         for command in re.findall(r"`?srdda ([a-z]+)\b", path.read_text(encoding="utf-8")):

@@ -22,7 +22,7 @@ import srdda
 from srdda.io import schema
 from srdda.io.modelfile import load_model, model_from_dict
 from srdda.io.results_store import ResultsStore
-from srdda.paper import examples_dir
+from srdda.apps.paper import examples_dir
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda import plotting
-from srdda.paper import get_example
+from srdda.apps import plotting
+from srdda.apps.paper import get_example
 
 G, SLOPE, FRICTION = 10.0, 30.0, 20.0  # m/s², incline and joint friction angle (degrees): tan 20° < tan 30°
 

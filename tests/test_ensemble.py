@@ -21,11 +21,11 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
-from srdda.cli import main
-from srdda.ensemble import SpecError, apply_values, load_spec, run_ensemble, run_one, sample
-from srdda.ensemble.collect import SettleRule
+from srdda.apps.cli import main
+from srdda.apps.ensemble import SpecError, apply_values, load_spec, run_ensemble, run_one, sample
+from srdda.apps.ensemble.collect import SettleRule
 from srdda.geometry.ground import Ground
-from srdda.ensemble.spec import StopRule
+from srdda.apps.ensemble.spec import StopRule
 from srdda.io.modelfile import load_model
 from srdda.simulation import run
 
@@ -139,7 +139,7 @@ def _numba_threads() -> int:
 def test_worker_processes_share_the_cores_among_their_numba_threads() -> None:
     # numba starts one thread per core in every process: two workers on two cores would each run a large
     # model's compiled loops on two threads (four threads on two cores)
-    from srdda.ensemble.runner import dask_client
+    from srdda.apps.ensemble.runner import dask_client
     with dask_client(2, None, processes=True) as client:
         threads = {client.submit(_numba_threads, pure=False).result() for _ in range(4)}
     assert threads == {max(1, (os.cpu_count() or 1) // 2)}
@@ -401,7 +401,7 @@ def test_a_killed_ensemble_resumes(reference: Path, tmp_path: Path) -> None:
 
 
 def test_the_paper_report_gets_the_ensemble_section(reference: Path, tmp_path: Path) -> None:
-    from srdda.report import write_report
+    from srdda.apps.report import write_report
 
     shutil.copytree(reference, tmp_path / "ensemble")
     md, html_path = write_report(tmp_path, [], command="test")

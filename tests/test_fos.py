@@ -1,4 +1,4 @@
-"""Factor of safety by shear strength reduction (srdda.fos) and the closed forms it is checked against."""
+"""Factor of safety by shear strength reduction (srdda.apps.fos) and the closed forms it is checked against."""
 from __future__ import annotations
 
 import json
@@ -9,18 +9,18 @@ import pytest
 from click.testing import CliRunner
 
 from srdda import JointMaterial, Material, Model, RunSettings
-from srdda.cases.plane_failure import (BASE_LENGTH, PLANE_DIP, PLANE_FAILURE, plane_failure_factor,
+from srdda.apps.verify.cases.plane_failure import (BASE_LENGTH, PLANE_DIP, PLANE_FAILURE, plane_failure_factor,
                                        plane_failure_model, plane_failure_water_forces, set_hoek_bray_water,
                                        wet_plane_forces, wet_plane_model)
-from srdda.cases.slope3d import (WEDGE_PLANES, HoekBrayAngles, hoek_bray_wedge_angles,
+from srdda.apps.verify.cases.slope3d import (WEDGE_PLANES, HoekBrayAngles, hoek_bray_wedge_angles,
                                  hoek_bray_wedge_factor_of_safety, wedge_faces, wedge_friction_for, wedge_model,
                                  wedge_solution, wedge_vertices, wedge_water_forces, wet_wedge_factor_of_safety)
 from srdda.constraints.water import UNIT_WEIGHT
 from srdda.geometry.jointsets3d import plane_normal
-from srdda.cli import main
-from srdda.fos import FailureCriterion, FosError, factor_of_safety, judge, reduce_strength, settle_dt, try_factor
+from srdda.apps.cli import main
+from srdda.apps.fos import FailureCriterion, FosError, factor_of_safety, judge, reduce_strength, settle_dt, try_factor
 from srdda.io.modelfile import save_model
-from srdda.verify import run_case
+from srdda.apps.verify import run_case
 
 
 # -- the closed forms ----------------------------------------------------------------------------------

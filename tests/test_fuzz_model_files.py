@@ -19,8 +19,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from srdda.cli import main
-from srdda.paper import examples_dir
+from srdda.apps.cli import main
+from srdda.apps.paper import examples_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES_2D = sorted((examples_dir() / "paper").glob("*.toml")) + [

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda.bench.models import BRICK, brick_wall
+from srdda.apps.bench.models import BRICK, brick_wall
 
 SIZE, STEPS = 30, 10
 

@@ -7,9 +7,9 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from srdda.cli import main
-from srdda.paper import relative_error, run_example
-from srdda.paper.swing import PAPER_DDA0_RE_TABLE1, PAPER_DDA0_RE_TABLE3
+from srdda.apps.cli import main
+from srdda.apps.paper import relative_error, run_example
+from srdda.apps.paper.swing import PAPER_DDA0_RE_TABLE1, PAPER_DDA0_RE_TABLE3
 
 METHODS = ("dda0", "dda1", "srdda")
 

@@ -10,8 +10,8 @@ import pytest
 from click.testing import CliRunner
 
 import srdda
-from srdda import plotting
-from srdda.cli import main
+from srdda.apps import plotting
+from srdda.apps.cli import main
 from srdda.geometry.polyhedron import box
 from srdda.io.results_store import ResultsStore, read_results
 from results_models import two_block_model

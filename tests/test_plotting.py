@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda import plotting
+from srdda.apps import plotting
 from srdda.io.results_store import ResultsStore, read_results
 from srdda.results import Result
 from results_models import rod_model, rod_settings, two_block_model

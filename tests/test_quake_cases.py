@@ -5,8 +5,8 @@ import pytest
 
 from srdda import RunSettings, run
 from srdda.history import TimeHistory
-from srdda.verify import CASES, run_case
-from srdda.verify.cases_quake import (NEWMARK_PENALTY, QUAKE_G, bolt_requirement, newmark_model,
+from srdda.apps.verify import CASES, run_case
+from srdda.apps.verify.cases_quake import (NEWMARK_PENALTY, QUAKE_G, bolt_requirement, newmark_model,
                                       newmark_sliding)
 
 PSI, PHI = np.radians(20.0), 30.0

@@ -11,12 +11,12 @@ import pytest
 from click.testing import CliRunner, Result as CliResult
 
 import srdda
-from srdda.cli import main
+from srdda.apps.cli import main
 from srdda.io import outputlock, results_store
 from srdda.io.modelfile import load_model
 from srdda.io.results_store import ResultsStore, ResultsWriteError, load_checkpoint, read_results, resume
 from srdda.ledger import ENERGY_NAMES
-from srdda.paper import examples_dir
+from srdda.apps.paper import examples_dir
 from srdda.state import initial_state
 
 ROD = examples_dir() / "paper" / "rod.toml"

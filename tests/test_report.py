@@ -9,8 +9,8 @@ import pytest
 
 import srdda
 from srdda.io.results_store import read_results
-from srdda.paper import EXAMPLES, Example
-from srdda.report import make_report, pivot_table
+from srdda.apps.paper import EXAMPLES, Example
+from srdda.apps.report import make_report, pivot_table
 from results_models import rod_model, rod_settings
 
 METHODS = ("dda0", "dda1", "srdda")
@@ -108,7 +108,7 @@ def _axes_without_units(figures) -> list[str]:
 
 
 def test_every_report_axis_and_table_column_has_a_unit(tmp_path: Path, stub_examples: list[str]) -> None:
-    from srdda.report import FIGURES, _runs_table, run_examples
+    from srdda.apps.report import FIGURES, _runs_table, run_examples
 
     run_ = run_examples(stub_examples[:1], METHODS)[0]
     rod_figures = FIGURES["rod"](run_.results, rod_model())  # the paper's swing figure on the same runs

@@ -6,11 +6,11 @@ import pytest
 from click.testing import CliRunner
 
 import srdda
-from srdda.cases.impacts import impact_case, impact_model
+from srdda.apps.verify.cases.impacts import impact_case, impact_model
 from srdda.contact import ImpactWarning
 from srdda.contact.law import impact_damping_ratio
 from srdda.io import ModelFileError, model_from_dict, save_model, load_model
-from srdda.cli import main
+from srdda.apps.cli import main
 from srdda.model import JointMaterial, ModelError
 
 RESTITUTIONS = (0.2, 0.5, 0.8, 1.0)

@@ -25,7 +25,7 @@ import pytest
 from click.testing import CliRunner
 
 import srdda
-from srdda.cli import main
+from srdda.apps.cli import main
 from srdda.io import results_store
 from srdda.io.results_store import ResultsDamageWarning, ResultsStore, read_results
 from results_fuzz import KINDS, FLUSH, check, damage, sources

@@ -1,4 +1,4 @@
-"""The run's summary (srdda.summary, summary.json) and the time histories of srdda history (issue 30, items 5-6)."""
+"""The run's summary (srdda.apps.summary, summary.json) and the time histories of srdda history (issue 30, items 5-6)."""
 from __future__ import annotations
 
 import json
@@ -11,12 +11,12 @@ import pytest
 from click.testing import CliRunner
 
 import srdda
-from srdda.cli import main
+from srdda.apps.cli import main
 from srdda.io.modelfile import load_model
 from srdda.io.results_store import ResultsStore, load_checkpoint
 from srdda.step import Stepper
-from srdda.summary import run_summary
-from srdda.verify.cases2d import INCLINE_G, INCLINE_PENALTY, INCLINE_PSI, incline_model_2d
+from srdda.apps.summary import run_summary
+from srdda.apps.verify.cases2d import INCLINE_G, INCLINE_PENALTY, INCLINE_PSI, incline_model_2d
 
 DATA = Path(__file__).parent / "data"
 PHI = 20.0  # the joint's friction angle (°): the block slides

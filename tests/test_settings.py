@@ -11,7 +11,7 @@ from pydantic import ValidationError
 import srdda
 import srdda.io
 from srdda import settings as settings_module
-from srdda.cli import main
+from srdda.apps.cli import main
 from srdda.io.modelfile import ModelFileError, model_from_dict
 from srdda.settings import RunSettings
 

@@ -38,7 +38,7 @@ def test_consistent_settings_give_no_warning() -> None:
 def test_the_cli_gives_a_settings_warning_as_one_line(tmp_path) -> None:
     from click.testing import CliRunner
 
-    from srdda.cli import main
+    from srdda.apps.cli import main
 
     model = tmp_path / "m.toml"
     model.write_text('[run]\ndt = 0.001\nsteps = 2\ncontacts = false\nshear_ratio = 0.2\n\n'

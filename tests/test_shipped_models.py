@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 import srdda
-from srdda.cli import main
+from srdda.apps.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE_EXAMPLES = Path(srdda.__file__).parent / "data" / "examples"

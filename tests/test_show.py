@@ -11,10 +11,10 @@ from click.testing import CliRunner
 from matplotlib.image import AxesImage
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-from srdda import modelview
-from srdda.cli import main
+from srdda.apps import modelview
+from srdda.apps.cli import main
 from srdda.io.modelfile import load_model
-from srdda.render3d import pyvista_renders
+from srdda.apps.render3d import pyvista_renders
 
 ROOT = Path(__file__).resolve().parents[1]
 SLOPE = ROOT / "examples" / "cutting" / "jointed_slope.toml"

@@ -1,10 +1,10 @@
-"""Closed forms of the 3D rock-slope checks (srdda.cases.slope3d) against independent computations."""
+"""Closed forms of the 3D rock-slope checks (srdda.apps.verify.cases.slope3d) against independent computations."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from srdda.cases.slope3d import (G, SLIDE_TOPPLE_CASES, WEDGE_PLANES, block_on_incline_model, incline_acceleration,
+from srdda.apps.verify.cases.slope3d import (G, SLIDE_TOPPLE_CASES, WEDGE_PLANES, block_on_incline_model, incline_acceleration,
                                  slide_topple_mode, slide_topple_model, toppling_angular_acceleration,
                                  wedge_friction_for, wedge_model, wedge_solution)
 from srdda.geometry.jointsets3d import plane_normal

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda.cases.solid import (conical_pendulum_case, extruded_case, intermediate_axis_case, spin_case,
+from srdda.apps.verify.cases.solid import (conical_pendulum_case, extruded_case, intermediate_axis_case, spin_case,
                                uniaxial_case)
 from srdda.geometry.polyhedron import box
 
@@ -142,8 +142,8 @@ def test_3d_figure_and_animation(tmp_path, monkeypatch):
     from PIL import Image
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    from srdda import plotting
-    from srdda.animation import animate
+    from srdda.apps import plotting
+    from srdda.apps.animation import animate
     from srdda.io.results_store import ResultsStore, read_results
 
     m = srdda.Model(gravity=(0.0, 0.0, -9.81))
@@ -156,7 +156,7 @@ def test_3d_figure_and_animation(tmp_path, monkeypatch):
     settings = srdda.RunSettings(dt=1e-3, n_steps=30, contacts=False)
     srdda.run(m, settings, recorders=[ResultsStore(tmp_path / "r.h5", settings)])
     stored = read_results(tmp_path / "r.h5")
-    from srdda import render3d
+    from srdda.apps import render3d
 
     if render3d.pyvista_renders():  # pyvista's picture in the figure, with matplotlib's colour bar
         fig = plotting.fig_model(stored)
@@ -172,7 +172,7 @@ def test_3d_figure_and_animation(tmp_path, monkeypatch):
     out = animate(stored, tmp_path / "a.gif", max_frames=5)  # pyvista's frames where it renders
     with Image.open(out) as gif:
         assert gif.n_frames == 5
-    from srdda import animation
+    from srdda.apps import animation
 
     monkeypatch.setattr(animation, "pyvista_renders", lambda: False)  # matplotlib's 3D axes
     with Image.open(animate(stored, tmp_path / "b.gif", max_frames=4)) as gif:

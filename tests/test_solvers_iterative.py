@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from srdda.assembly.system import BlockSystem
-from srdda.bench.models import brick_wall
+from srdda.apps.bench.models import brick_wall
 from srdda.solvers import (ITERATIVE_LIMIT, AutoSolver, ConjugateGradientSolver, SolverError, SuperLUSolver,
                            get_solver)
 from srdda.state import initial_state
@@ -207,7 +207,8 @@ def test_compiled_block_jacobi_cg_is_the_array_cg(ndof):
     # block_jacobi_pcg runs pcg's iteration as one compiled parallel loop: the same iterations, stopping
     # rule and Ritz value; its sums run in another order, so the iterates agree to round-off (1e-12 of
     # the solution here, measured 1e-16), not bit for bit
-    from srdda.solvers_iterative import BlockJacobi, _bsr_product, block_jacobi_pcg, pcg
+    from srdda.solvers import BlockJacobi, block_jacobi_pcg, pcg
+    from srdda.solvers._iterative import _bsr_product
     system = _chain(300, coupling=0.4, seed=ndof) if ndof == 6 else _chain12(300)
     matrix, rhs = system.to_bsr(), system.full_rhs()
     product = np.empty_like(rhs)
@@ -262,7 +263,7 @@ def test_a_run_holds_blas_to_one_thread_while_it_steps():
 
 @pytest.mark.parametrize("ndof", [6, 12])
 def test_block_jacobi_inverts_each_block_by_cholesky(ndof):
-    from srdda.solvers_iterative import BlockJacobi, IterativeSolverError
+    from srdda.solvers import BlockJacobi, IterativeSolverError
     rng = np.random.default_rng(ndof)
     a = rng.normal(size=(400, ndof, ndof))
     diag = a @ np.swapaxes(a, 1, 2) + 0.1 * np.eye(ndof)  # condition numbers up to about 1e4

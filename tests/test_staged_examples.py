@@ -111,9 +111,9 @@ def test_cut_blocks_take_the_names_given() -> None:
 
 
 def test_the_wedge_cut_verification_case_passes() -> None:
-    # the example's model (srdda.cases.slope3d.wedge_cut_model) against Hoek & Bray, as `srdda verify` runs it
-    # (the rows' tolerances and their reasons are in src/srdda/verify/cases_stages.py)
-    from srdda.verify import run_case
+    # the example's model (srdda.apps.verify.cases.slope3d.wedge_cut_model) against Hoek & Bray, as `srdda verify` runs it
+    # (the rows' tolerances and their reasons are in src/srdda/apps/verify/cases_stages.py)
+    from srdda.apps.verify import run_case
 
     rows = run_case("stage-wedge-cut-3d", methods=("srdda",))
     assert len(rows) == 2 and all(r["passed"] for r in rows), [(r["quantity"], r["ours"]) for r in rows]
@@ -121,7 +121,7 @@ def test_the_wedge_cut_verification_case_passes() -> None:
 
 def test_the_shipped_wedge_is_the_model_of_the_verification_case() -> None:
     # wedge-cut.toml is wedge_cut_model() written out (examples/stages/wedge_cut.py): the same blocks and stages
-    from srdda.cases.slope3d import wedge_cut_model
+    from srdda.apps.verify.cases.slope3d import wedge_cut_model
 
     shipped, _ = load_model(STAGES / "wedge-cut.toml")
     built = wedge_cut_model()

@@ -21,7 +21,7 @@ from srdda.model import ModelError
 from srdda.simulation import run_single
 from srdda.stages import initial_mark, stage_arrays, stage_mark
 from srdda.staging import begin_stage
-from srdda.verify.cases_stages import stacked_column
+from srdda.apps.verify.cases_stages import stacked_column
 
 G = 9.81
 
@@ -257,8 +257,8 @@ def test_the_in_memory_run_and_the_file_agree_and_a_removed_block_stays_put() ->
 
 
 def test_the_2d_stage_verification_cases_pass() -> None:
-    # the issue's acceptance, as `srdda verify` runs it (the rows' tolerances are in src/srdda/verify/cases_stages.py)
-    from srdda.verify import run_case
+    # the issue's acceptance, as `srdda verify` runs it (the rows' tolerances are in src/srdda/apps/verify/cases_stages.py)
+    from srdda.apps.verify import run_case
 
     rows = run_case("stage-column-2d", methods=("srdda",)) + run_case("stage-excavation-2d", methods=("srdda",))
     assert len(rows) == 3 and all(r["passed"] for r in rows), [(r["quantity"], r["rel_error"]) for r in rows]
@@ -286,9 +286,9 @@ def test_stop_ends_a_staged_run_in_a_dynamic_stage() -> None:
 def test_plots_vtk_and_the_summary_show_the_stages(tmp_path: Path) -> None:
     import meshio
 
-    from srdda import plotting
+    from srdda.apps import plotting
     from srdda.io.vtk import write_vtu_series
-    from srdda.summary import format_summary, run_summary
+    from srdda.apps.summary import format_summary, run_summary
 
     path = tmp_path / "staged.h5"
     res = srdda.run(_staged_model(), STAGED, recorders=[ResultsStore(path, STAGED, flush_every=4)])

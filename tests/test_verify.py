@@ -10,8 +10,8 @@ from pathlib import Path
 
 from click.testing import CliRunner
 
-from srdda.cli import main
-from srdda.verify import CASES, Case, row, run_case
+from srdda.apps.cli import main
+from srdda.apps.verify import CASES, Case, row, run_case
 
 REQUIRED = {"case", "quantity", "method", "ours", "reference", "rel_error"}
 MANUAL = Path(__file__).resolve().parents[1] / "docs" / "verification.md"

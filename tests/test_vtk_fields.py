@@ -111,7 +111,7 @@ def test_the_default_stride_keeps_a_series_under_200_files() -> None:
 def test_srdda_vtk_writes_a_short_series_of_a_3d_run_with_contacts(tmp_path: Path) -> None:
     from click.testing import CliRunner
 
-    from srdda.cli import main
+    from srdda.apps.cli import main
 
     path = tmp_path / "run.h5"
     _sliding_run(path, 3)

@@ -10,14 +10,14 @@ import pytest
 import shapely
 
 import srdda
-from srdda.cases.plane_failure import (PLANE_DIP, plane_failure_acceleration, plane_failure_factor, wet_plane_forces,
+from srdda.apps.verify.cases.plane_failure import (PLANE_DIP, plane_failure_acceleration, plane_failure_factor, wet_plane_forces,
                                        wet_plane_model)
 from srdda.constraints.water import UNIT_WEIGHT, submerged_integrals, water_table
 from srdda.io import ModelFileError, model_from_dict, model_to_dict
 from srdda.model import ModelError
 from srdda.settings import RunSettings
 from srdda.simulation import EnergyWarning
-from srdda.verify import run_case
+from srdda.apps.verify import run_case
 
 
 # -- the pressure and its integrals ---------------------------------------------------------------------
@@ -201,7 +201,8 @@ def test_a_lowered_table_changes_the_run():
 def test_contacts_on_a_crack_take_the_cracks_water_not_the_tables():
     """A closed crack (the block against a fixed block behind it): its contacts get no pressure of the phreatic
     surface, the crack's faces the crack's water; the sliding plane's contacts the surface's."""
-    from srdda.constraints.water import contact_water, crack_facets
+    from srdda.constraints.water import crack_facets
+    from srdda.contact.water import contact_water
     from srdda.contact.pipeline import ContactModel
     from srdda.geometry.facets import boundary_simplices
     from srdda.step import contact_parameters, model_half_height
@@ -229,7 +230,7 @@ def test_contacts_on_a_crack_take_the_cracks_water_not_the_tables():
 
 def test_the_newton_contact_solve_carries_the_effective_force():
     """contact_solver = "newton" adds the same water forces: the joint carries W − p·A (water-uplift-2d)."""
-    from srdda.verify.water import UPLIFT_EFFECTIVE, UPLIFT_LEVEL, _uplift_model
+    from srdda.apps.verify.water import UPLIFT_EFFECTIVE, UPLIFT_LEVEL, _uplift_model
 
     model = _uplift_model(2)
     res = srdda.run(model, RunSettings(dt=1e-3, n_steps=200, penalty=1e10, contact_solver="newton"))
@@ -241,12 +242,12 @@ def test_the_newton_contact_solve_carries_the_effective_force():
 
 @pytest.mark.parametrize("level", [10.0, 3.0, 1.0])
 def test_a_wedge_gets_the_water_on_each_plane(level):
-    """The tetrahedral wedge (srdda.cases.slope3d, 6 m high) under a level above it, through it, near its toe:
+    """The tetrahedral wedge (srdda.apps.verify.cases.slope3d, 6 m high) under a level above it, through it, near its toe:
     the water forces of each plane's contacts add up to γ_w ∫max(h, 0) dA over the wedge's face on it (the
     wetted integral, checked against shapely above), though a slab's corner also touches the wedge's face
     (its bond is left out: one side per joint)."""
-    from srdda.cases.slope3d import wedge_model
-    from srdda.constraints.water import contact_water
+    from srdda.apps.verify.cases.slope3d import wedge_model
+    from srdda.contact.water import contact_water
     from srdda.contact.pipeline import ContactModel
     from srdda.geometry.facets import area_vectors, boundary_simplices
     from srdda.step import contact_parameters, model_half_height
@@ -280,7 +281,7 @@ def test_a_stage_raises_and_lowers_the_water(levels):
     # surface and settles (equilibrium stages): the joint carries W − p·A under water, W again once drained.
     # The ratio 1e-5 leaves each block's unbalanced force below 1e-5 of its weight: the springs carry the
     # closed form to that, and 1e-4 of W leaves 10 times that margin.
-    from srdda.verify.water import _uplift_model
+    from srdda.apps.verify.water import _uplift_model
     model = _uplift_model(2)
     model.water = model.water.at_level(levels[0])
     model.add_stage(srdda.Stage("dry", kind="equilibrium"))
@@ -295,7 +296,7 @@ def test_a_stage_raises_and_lowers_the_water(levels):
 
 
 def test_a_stage_water_level_must_be_finite():
-    from srdda.verify.water import _uplift_model
+    from srdda.apps.verify.water import _uplift_model
     model = _uplift_model(2)
     model.add_stage(srdda.Stage("flood", water_level=float("nan")))
     with pytest.raises(ModelError, match="water_level"):

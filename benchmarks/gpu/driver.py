@@ -35,13 +35,12 @@ import numpy as np
 from srdda import simulation
 from srdda.assembly.system import BlockSystem
 from srdda.backends import arrays as arrays_module
-from srdda.backends import conjugate_gradient as cg_module
+from srdda.solvers import _gpu as cg_module
 from srdda.backends.arrays import ArrayBackend, cupy_backend, numpy_backend
-from srdda.backends.conjugate_gradient import ArrayConjugateGradient
-from srdda.bench.models import brick_wall, english_bond_wall
-from srdda.bench.runner import CASES, BenchCase, Probe, cg_iterations, measure
-from srdda.solvers import ConjugateGradientSolver, SuperLUSolver
-from srdda.solvers_iterative import _bsr_product
+from srdda.apps.bench.models import brick_wall, english_bond_wall
+from srdda.apps.bench.runner import CASES, BenchCase, Probe, cg_iterations, measure
+from srdda.solvers import ArrayConjugateGradient, ConjugateGradientSolver, SuperLUSolver
+from srdda.solvers._iterative import _bsr_product
 from srdda.state import initial_state
 from srdda.step import Stepper
 

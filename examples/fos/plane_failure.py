@@ -1,4 +1,4 @@
-"""Hoek & Bray's plane failure as model files for `srdda fos` (srdda.cases.plane_failure; docs/factor-of-safety.md).
+"""Hoek & Bray's plane failure as model files for `srdda fos` (srdda.apps.verify.cases.plane_failure; docs/factor-of-safety.md).
 
 Writes beside this script plane-failure.toml: a 12 m slope with a 60° face, a sliding plane dipping 30°
 that daylights at the toe, a dry tension crack, c = 20 kPa and φ = 25° on the plane; and plane-failure-wet.toml:
@@ -11,7 +11,7 @@ from pathlib import Path
 import tomli_w
 
 from srdda import RunSettings
-from srdda.cases.plane_failure import PLANE_FAILURE, plane_failure_model
+from srdda.apps.verify.cases.plane_failure import PLANE_FAILURE, plane_failure_model
 from srdda.io.modelfile import model_to_dict
 
 HERE = Path(__file__).parent

@@ -1,4 +1,4 @@
-"""The classical 3D rock-slope checks as model files (srdda.cases.slope3d; docs/slope-checks-3d.md).
+"""The classical 3D rock-slope checks as model files (srdda.apps.verify.cases.slope3d; docs/slope-checks-3d.md).
 
 Writes, beside this script:
 - slide-topple-<region>.toml: a block on a 30° incline, one case in each region of the sliding /
@@ -16,7 +16,7 @@ from pathlib import Path
 import tomli_w
 
 from srdda import RunSettings
-from srdda.cases.slope3d import (SLIDE_TOPPLE_CASES, WEDGE_FACE, WEDGE_PLANES, incline_acceleration,
+from srdda.apps.verify.cases.slope3d import (SLIDE_TOPPLE_CASES, WEDGE_FACE, WEDGE_PLANES, incline_acceleration,
                                  slide_topple_model, toppling_angular_acceleration, wedge_friction_for, wedge_model,
                                  wedge_solution)
 from srdda.io.modelfile import model_to_dict

@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from srdda import plotting  # noqa: E402
-from srdda.cases.slope3d import WEDGE_PLANES, wedge_solution  # noqa: E402
+from srdda.apps.verify.cases.slope3d import WEDGE_PLANES, wedge_solution  # noqa: E402
 from srdda.io import load_model, read_results  # noqa: E402
 
 HERE = Path(__file__).parent
@@ -93,7 +93,7 @@ def wedge(run: Path) -> None:
     print(f"residual: acceleration along the line {a:.5f} m/s2, Hoek & Bray {expected.acceleration:.5f} "
           f"({a / expected.acceleration - 1:+.2e}); travel {(centroid[-1] - centroid[start]) @ line:.4f} m")
     # before (the end of gravity, the toe in place) and after (the end of residual); the joint-plane blocks see-through
-    from srdda.render3d import render_blocks
+    from srdda.apps.render3d import render_blocks
 
     colours = {"wedge": "tab:orange", "plane A": "0.7", "plane B": "0.55", "toe": "tan"}
     verts = res.array("vertices")

@@ -1,7 +1,7 @@
-"""A 3D wedge above a cut slope, staged (srdda.cases.slope3d.wedge_cut_model): equilibrium with the toe in place,
+"""A 3D wedge above a cut slope, staged (srdda.apps.verify.cases.slope3d.wedge_cut_model): equilibrium with the toe in place,
 the toe excavated, then the joints weakened to their residual friction.
 
-The tetrahedral wedge of srdda.cases.slope3d (joint planes A 40°/130° and B 60°/220°, slope face
+The tetrahedral wedge of srdda.apps.verify.cases.slope3d (joint planes A 40°/130° and B 60°/220°, slope face
 70°/160°, horizontal top 6 m above the point where the line of intersection daylights). Before the cut,
 the rock in front of the face up to 2 m above that point, the "toe" (fixed, as intact rock), covers the
 daylight point: the line of intersection does not daylight. Stages:
@@ -22,7 +22,7 @@ from pathlib import Path
 import tomli_w
 
 import srdda
-from srdda.cases.slope3d import WEDGE_FACE, WEDGE_PLANES, wedge_cut_model, wedge_friction_for, wedge_solution
+from srdda.apps.verify.cases.slope3d import WEDGE_FACE, WEDGE_PLANES, wedge_cut_model, wedge_friction_for, wedge_solution
 from srdda.io.modelfile import model_to_dict
 
 HERE = Path(__file__).parent

@@ -12,6 +12,8 @@ post-adjusted rotations (``dda1``) and SRDDA (``srdda``). SI units throughout.
 True
 """
 from . import threads as _threads  # first: how numba's threads wait, before they start (srdda.threads)
+from ._version import __version__
+from . import _aliases
 from .constraints import MotionHistory, hinge_forces
 from .constraints.water import TensionCrack, WaterTable
 from .history import TimeHistory
@@ -21,9 +23,8 @@ from .integrators import METHODS, Method, TimeScheme, method_preset
 from .model import JointMaterial, Load, Material, Model, ModelError
 from .results import Result
 from .settings import RunSettings
-from .simulation import run
+from .simulation import Settled, run, settle
 from .stages import Stage
-from .equilibrium import Settled, settle
 from .state import State
 from .solvers import available_solvers, get_solver
 from .io.results_store import ResultsStore, StoredResult, read_results, resume
@@ -32,9 +33,9 @@ from .geometry.jointsets2d import JointSet, circular_opening, joint_traces, poly
 from .cutmodel import add_cut_blocks, add_cut_polyhedra
 from .geometry.cutting3d import PolyhedralCut, convex_hull_polyhedron, cut_polyhedra
 from .geometry.jointsets3d import JointPlanes, JointSet3D, joint_planes
-from .fos import FactorOfSafety, FailureCriterion, factor_of_safety
+from .apps.fos import FactorOfSafety, FailureCriterion, factor_of_safety
 
-__version__ = "0.1.0"
+_aliases.install()  # the module paths of srdda 0.1 that moved (srdda.cli, srdda.verify, ...), for one release
 
 __all__ = [
     "METHODS", "ContactSet", "JointMaterial", "Load", "Material", "Method", "Model", "ModelError",

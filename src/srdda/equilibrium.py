@@ -1,4 +1,4 @@
-"""Equilibrium: the unbalanced-force ratio of a step, and bringing a model to rest under its loads.
+"""Equilibrium: the unbalanced-force ratio of a step, the measure of a model brought to rest under its loads.
 
 What "unbalanced force" means for a DDA block. A step solves the block's
 equilibrium with its inertial force: M·a + (elastic, contact, constraint
@@ -22,7 +22,7 @@ no part. A model with no applied force has the ratio inf while anything is
 unbalanced (0 otherwise).
 
 :class:`UnbalancedForceTerm` computes it at every step and carries it in
-``State.carried["equilibrium"]`` (so a checkpoint keeps it); :func:`settle`
+``State.carried["equilibrium"]`` (so a checkpoint keeps it); :func:`srdda.simulation.settle`
 runs a model in damped dynamic steps (Shi's velocity ratio: the velocity at
 the end of each step is multiplied by :data:`SETTLE_VELOCITY_RATIO` = 0.8
 before the next) until the ratio falls below a tolerance (default 1e-5) or a
@@ -34,25 +34,21 @@ within 1.8 times the best step count of those measured.
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .constraints.loads import point_load_forces
-from .model import Model, ModelArrays
-from .settings import RunSettings
+from .model import ModelArrays
 from .state import State
 from .term import StepContext, Term
 
 if TYPE_CHECKING:
-    from .contact.law import ContactLaw
     from .integrators.schemes import SchemeCoefficients
-    from .results import Recorder
 
-__all__ = ["RATIO_TOLERANCE", "UnbalancedForce", "UnbalancedForceTerm", "Settled", "unbalanced_forces",
-           "applied_forces", "unbalanced_force_ratio", "unbalanced_force", "settle", "SETTLE_VELOCITY_RATIO"]
+__all__ = ["RATIO_TOLERANCE", "UnbalancedForce", "UnbalancedForceTerm", "unbalanced_forces",
+           "applied_forces", "unbalanced_force_ratio", "unbalanced_force", "SETTLE_VELOCITY_RATIO"]
 
 RATIO_TOLERANCE = 1e-5  # 3DEC's default for `model solve`
 SETTLE_VELOCITY_RATIO = 0.8  # damping of the settle steps (module doc: measured)
@@ -135,47 +131,3 @@ def reached(state: State, tolerance: float) -> bool:
     """True once the ratio of the step that led to ``state`` is below ``tolerance``."""
     carried = unbalanced_force(state)
     return carried is not None and carried.ratio < tolerance
-
-
-@dataclass(frozen=True)
-class Settled:
-    """What :func:`settle` reached: the last state, its ratio, the steps taken and whether it got below the
-    tolerance; ``status`` is the run's (``completed``, or why it stopped)."""
-
-    state: State
-    ratio: float
-    steps: int
-    reached: bool
-    status: str
-
-
-def settle(model: Model | ModelArrays, settings: RunSettings, state: State | None = None,
-           tolerance: float = RATIO_TOLERANCE, max_steps: int = 20000,
-           velocity_ratio: float | None = SETTLE_VELOCITY_RATIO,
-           recorders: Sequence[Recorder] = (), extra_terms: Sequence[Term] = (),
-           contact_law: ContactLaw | None = None, progress: Callable[[int], None] | None = None) -> Settled:
-    """Bring ``model`` to rest under its loads from ``state`` (default: its initial state).
-
-    Damped dynamic steps (``velocity_ratio``, 0.8 by default; 0 is Shi's static mode, None keeps the
-    settings') until the unbalanced-force ratio (module doc) falls below ``tolerance`` or ``max_steps``
-    steps are taken. ``settings`` give Δt, the method and the contact model; their steps and end time
-    are replaced by ``max_steps``. ``recorders``, ``extra_terms`` and ``contact_law`` are those of
-    :func:`srdda.simulation.run`. Returns the last state, the ratio it reached, the steps taken and
-    whether the ratio fell below ``tolerance``.
-    """
-    from .simulation import run_single  # the run sits above this module
-
-    arrays = model.arrays() if isinstance(model, Model) else model
-    chosen = replace(settings, n_steps=max_steps, end_time=None)
-    if velocity_ratio is not None:
-        chosen = replace(chosen, velocity_ratio=velocity_ratio)
-    start = state.step if state is not None else 0
-    state = without_ratio(state) if state is not None else None
-    result = run_single(arrays, chosen, progress=progress, state=state, recorders=recorders, keep_history=False,
-                        stop=lambda s: reached(s, tolerance), extra_terms=[*extra_terms, UnbalancedForceTerm()],
-                        contact_law=contact_law)
-    final = result.final_state
-    assert final is not None
-    carried = unbalanced_force(final)
-    ratio = carried.ratio if carried is not None else float("nan")
-    return Settled(final, ratio, final.step - start, carried is not None and ratio < tolerance, result.status)

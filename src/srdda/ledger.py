@@ -39,7 +39,7 @@ when it is zero.
 
 The gravitational energy is -Σ m g·c over every block, fixed ones included
 (their share is a constant): only its changes have a meaning. The report
-(:func:`srdda.plotting.fig_energy_ledger`) draws it from the initial centroid
+(:func:`srdda.apps.plotting.fig_energy_ledger`) draws it from the initial centroid
 heights of the moving blocks.
 """
 from __future__ import annotations

@@ -20,7 +20,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from typing import TYPE_CHECKING, Annotated, ClassVar, Literal
+from typing import Annotated, ClassVar, Literal
 
 from pydantic import (AfterValidator, AliasChoices, BeforeValidator, ConfigDict, Field, ValidationInfo,
                       field_validator, model_validator)
@@ -31,16 +31,11 @@ from .integrators.methods import Method, MethodName, method_preset
 from .integrators.schemes import SchemeName
 from .backends.arrays import DeviceName, GPU_SOLVERS, resolve_device
 from .units import reject_boolean, to_si
-from .solvers import DEFAULT_TOLERANCE, SOLVERS, available_solvers
+from .solvers import DEFAULT_TOLERANCE, available_solvers
 
 __all__ = ["RunSettings", "ContactSolverName", "MIN_DT", "MAX_DT", "MAX_STEPS", "MAX_STEP_CUT_FACTOR"]
 
 ContactSolverName = Literal["open-close", "newton"]  # Shi's open-close iteration, or Newton's method
-
-if TYPE_CHECKING:  # the backends' names are a table built at import (srdda.solvers.SOLVERS): a str to mypy
-    SolverName = str
-else:
-    SolverName = Literal[SOLVERS]
 
 # Δt bounds: Shi's coefficients use 4/Δt², finite only for Δt above ~1e-154; a step below a
 # picosecond or above a million seconds is a unit mistake in every rock-mechanics model.
@@ -96,7 +91,7 @@ class RunSettings:
     scheme: SchemeName | None = None  # override the method's time scheme
     linearization: Literal["start", "secant"] | None = None  # override the method's linearisation
     penalty: Annotated[NewtonsPerMetre, Field(gt=0)] = 1e9  # default stiffness of fixed points (N/m)
-    solver: Annotated[SolverName, AfterValidator(_installed)] = "auto"
+    solver: Annotated[str, AfterValidator(_installed)] = "auto"  # a name of available_solvers()
     # the iterative backends (cg-amg, cg-jacobi; auto above ITERATIVE_LIMIT blocks) stop when every unknown
     # of the increment is estimated within this of the exact solution (m): docs/performance.md
     solver_tolerance: Annotated[Metres, Field(gt=0, le=1.0)] = DEFAULT_TOLERANCE

@@ -4,7 +4,9 @@ Each step is :meth:`srdda.step.Stepper.step` (predict, iterate over the terms,
 commit); this loop only takes its outcome: an accepted step is recorded, a cut
 step is repeated with the smaller Δt (the run stops when Δt falls below
 ``min_dt``), a diverged step ends the run with its message. Every step before
-the end stays recorded.
+the end stays recorded. A model with stages runs them one after the other
+(:func:`srdda.staging.run_stages`, each stage by :func:`run_single`);
+:func:`settle` runs a model until it is at rest under its loads.
 """
 from __future__ import annotations
 
@@ -12,21 +14,24 @@ import math
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .equilibrium import (RATIO_TOLERANCE, SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, unbalanced_force,
+                          without_ratio)
 from .ledger import CONTACT_ADVICE, POINT_UPDATE_ADVICE, EnergyWatch, energies
 from .contact.law import ContactLaw
 from .model import Model, ModelArrays
 from .results import Recorder, Result
 from .settings import RunSettings
 from .solvers import blas_threads_for_steps, get_solver
+from .staging import run_stages
 from .state import State, initial_state
 from .step import Stepper, default_terms, time_step_advice
 from .term import CUT_CAUSES, Term
 
-__all__ = ["run", "run_single", "EnergyWarning", "TimeStepWarning"]
+__all__ = ["run", "run_single", "settle", "Settled", "EnergyWarning", "TimeStepWarning"]
 
 
 class EnergyWarning(UserWarning):
@@ -50,10 +55,8 @@ def run(model: Model | ModelArrays, settings: RunSettings, progress: Callable[[i
     """
     arrays = model.arrays() if isinstance(model, Model) else model
     if arrays.stages:
-        from .staging import run_stages  # the stages run this module's run_single
-
         return run_stages(arrays, settings, progress, state, recorders, keep_history, keep_vertices, extra_terms,
-                          contact_law, stop)
+                          contact_law, stop, run_stage=run_single)
     return run_single(arrays, settings, progress, state, recorders, keep_history, stop, keep_vertices, extra_terms,
                       contact_law)
 
@@ -203,3 +206,45 @@ class WarningSummary:
 def _reached(time: float, end_time: float, dt: float) -> bool:
     """True once ``time`` is at ``end_time`` (to a millionth of the step, against rounding)."""
     return time >= end_time - 1e-6 * dt
+
+
+@dataclass(frozen=True)
+class Settled:
+    """What :func:`settle` reached: the last state, its ratio, the steps taken and whether it got below the
+    tolerance; ``status`` is the run's (``completed``, or why it stopped)."""
+
+    state: State
+    ratio: float
+    steps: int
+    reached: bool
+    status: str
+
+
+def settle(model: Model | ModelArrays, settings: RunSettings, state: State | None = None,
+           tolerance: float = RATIO_TOLERANCE, max_steps: int = 20000,
+           velocity_ratio: float | None = SETTLE_VELOCITY_RATIO,
+           recorders: Sequence[Recorder] = (), extra_terms: Sequence[Term] = (),
+           contact_law: ContactLaw | None = None, progress: Callable[[int], None] | None = None) -> Settled:
+    """Bring ``model`` to rest under its loads from ``state`` (default: its initial state).
+
+    Damped dynamic steps (``velocity_ratio``, 0.8 by default; 0 is Shi's static mode, None keeps the
+    settings') until the unbalanced-force ratio (:mod:`srdda.equilibrium`) falls below ``tolerance`` or ``max_steps``
+    steps are taken. ``settings`` give Δt, the method and the contact model; their steps and end time
+    are replaced by ``max_steps``. ``recorders``, ``extra_terms`` and ``contact_law`` are those of
+    :func:`srdda.simulation.run`. Returns the last state, the ratio it reached, the steps taken and
+    whether the ratio fell below ``tolerance``.
+    """
+    arrays = model.arrays() if isinstance(model, Model) else model
+    chosen = replace(settings, n_steps=max_steps, end_time=None)
+    if velocity_ratio is not None:
+        chosen = replace(chosen, velocity_ratio=velocity_ratio)
+    start = state.step if state is not None else 0
+    state = without_ratio(state) if state is not None else None
+    result = run_single(arrays, chosen, progress=progress, state=state, recorders=recorders, keep_history=False,
+                        stop=lambda s: reached(s, tolerance), extra_terms=[*extra_terms, UnbalancedForceTerm()],
+                        contact_law=contact_law)
+    final = result.final_state
+    assert final is not None
+    carried = unbalanced_force(final)
+    ratio = carried.ratio if carried is not None else float("nan")
+    return Settled(final, ratio, final.step - start, carried is not None and ratio < tolerance, result.status)

@@ -2,7 +2,7 @@
 
 :func:`run_stages` begins each stage from the state the one before ended in
 (its changes applied, :func:`begin_stage`), runs it with
-:func:`srdda.simulation.run_single` under its settings (:func:`stage_settings`;
+``run_stage`` (:func:`srdda.simulation.run_single`) under its settings (:func:`stage_settings`;
 an equilibrium stage until the unbalanced-force ratio of :mod:`srdda.equilibrium`
 falls below its tolerance) and tells the recorders each stage's begin and end
 (the stage table of the results file). The stage mark rides in the state
@@ -21,7 +21,6 @@ from .equilibrium import SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, un
 from .model import ModelArrays
 from .results import Result
 from .settings import RunSettings
-from .simulation import run_single
 from .stages import CARRIED, CHANGES, StageMark, StagePlan, at_rest, initial_mark, stage_arrays, stage_mark
 from .state import State, initial_state
 from .term import Term
@@ -57,7 +56,7 @@ def begin_stage(base: ModelArrays, index: int, state: State, before: StageMark) 
 def stage_settings(settings: RunSettings, plan: StagePlan, mark: StageMark, state: State) -> RunSettings:
     """The run settings of the rest of a stage from ``state``: the model's with the stage's, its length
     counted from the stage's start (an equilibrium stage: ``max_steps``, in the damped steps of
-    :func:`srdda.equilibrium.settle` unless the stage gives ``velocity_ratio``)."""
+    :func:`srdda.simulation.settle` unless the stage gives ``velocity_ratio``)."""
     chosen = replace(settings, **{k: v for k, v in plan.run.items() if k not in ("n_steps", "end_time")})
     if plan.kind == "equilibrium":
         if "velocity_ratio" not in plan.run:
@@ -134,12 +133,14 @@ def _ended(entry: dict[str, Any], plan: StagePlan, state: State, status: str) ->
 def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[int], None] | None = None,
                state: State | None = None, recorders: Sequence[Recorder] = (), keep_history: bool = True,
                keep_vertices: bool = True, extra_terms: Sequence[Term] = (),
-               contact_law: ContactLaw | None = None, stop: Callable[[State], bool] | None = None) -> Result:
+               contact_law: ContactLaw | None = None, stop: Callable[[State], bool] | None = None, *,
+               run_stage: Callable[..., Result]) -> Result:
     """Run the stages of ``arrays`` (``arrays.stages``) one after the other from ``state`` (default: the initial
     state; a state of a staged run, e.g. a checkpoint, continues in the stage it carries).
 
     Arguments as :func:`srdda.simulation.run`; ``settings`` are the model's, each stage's changing them
-    (:func:`stage_settings`). Returns one :class:`Result` of the whole run, ``result.stages`` the stage
+    (:func:`stage_settings`). ``run_stage`` runs one stage: :func:`srdda.simulation.run_single`, whose
+    module calls this one (so this module does not import it). Returns one :class:`Result` of the whole run, ``result.stages`` the stage
     table (first step, start time, end, ratio reached). The run stops at the first stage that does not
     complete (diverged, or Δt below its minimum), with that stage's status. ``stop(state)``, called after
     every accepted step of the dynamic stages, ends the whole run (completed) when it returns True.
@@ -176,10 +177,10 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
             else:
                 ends = (lambda s, tol=plan.tolerance: reached(s, tol)) if plan.kind == "equilibrium" \
                     else (user_stop if stop is not None else None)
-                part = run_single(stage_arrays_, chosen, progress=progress, state=state, recorders=[sinks],
-                                  keep_history=False, stop=ends, keep_vertices=False,
-                                  extra_terms=[*extra_terms, UnbalancedForceTerm(), StageTerm(mark)],
-                                  contact_law=contact_law)
+                part = run_stage(stage_arrays_, chosen, progress=progress, state=state, recorders=[sinks],
+                                 keep_history=False, stop=ends, keep_vertices=False,
+                                 extra_terms=[*extra_terms, UnbalancedForceTerm(), StageTerm(mark)],
+                                 contact_law=contact_law)
                 assert part.final_state is not None
                 state, stage_status = part.final_state, part.status
             sinks.stage(mark.index, _ended(entry, plan, state, stage_status))
@@ -197,4 +198,3 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
     for sink in sinks.sinks:
         sink.finish(status, state)
     return result
-

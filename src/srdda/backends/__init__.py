@@ -3,8 +3,8 @@
 * :mod:`srdda.backends.arrays`: an :class:`~srdda.backends.arrays.ArrayBackend` is an array module
   (numpy or CuPy) with its sparse module (scipy.sparse or cupyx.scipy.sparse); CuPy is imported only
   when a GPU is asked for (the optional extra ``srdda[gpu]``); the choice of ``RunSettings.device``.
-* :mod:`srdda.backends.conjugate_gradient`: the block-Jacobi conjugate gradient written once on an
-  array backend, behind the solver seam (``get_solver(name, tolerance, device="gpu")``). On numpy it
+* the block-Jacobi conjugate gradient written once on an array backend is a solver
+  (:func:`srdda.solvers.gpu_solver`, ``get_solver(name, tolerance, device="gpu")``). On numpy it
   is what the tests run in CI; on CuPy it is the GPU solver.
 
 The step's assembly and contact work stay on the CPU: the solver receives the step's

@@ -1,7 +1,7 @@
 """Array backends (numpy on the CPU, CuPy on a CUDA GPU) and the choice of ``RunSettings.device``.
 
 An :class:`ArrayBackend` names the array module ``xp`` and its sparse module; code written on
-them (:mod:`srdda.backends.conjugate_gradient`) uses only what numpy and CuPy share, so the same
+them (:mod:`srdda.solvers._gpu`) uses only what numpy and CuPy share, so the same
 lines run on numpy in CI and on CuPy on a GPU. The array API standard (and ``array-api-compat``)
 has no sparse matrices, which the solve needs, so the backend pairs the two modules itself.
 

@@ -7,7 +7,7 @@ upward normal) the water in the joints has the hydrostatic pressure
 
 γ_w the unit weight, x_s a point of the surface, n its upward normal and u
 the unit vector against gravity: h is the height of the surface straight
-above x. Every contact below the surface (:func:`contact_water`) carries the water
+above x. Every contact below the surface (:func:`srdda.contact.water.contact_water`) carries the water
 on the joint area its bond stands for (the faces of its corner's block that
 lie on the other block, :class:`~srdda.contact.record.ContactRecord`'s
 ``bond_faces``: each face's exact ∫p dA shared among its corners as the bond
@@ -42,12 +42,10 @@ if TYPE_CHECKING:
     from collections.abc import Sequence
 
     from ..assembly.system import BlockSystem
-    from ..contact.record import ContactRecord
     from ..model import ModelArrays
     from ..state import State
 
-__all__ = ["UNIT_WEIGHT", "TensionCrack", "WaterTable", "water_table", "one_side", "face_pressures", "contact_water",
-           "submerged_integrals",
+__all__ = ["UNIT_WEIGHT", "TensionCrack", "WaterTable", "water_table", "face_pressures", "submerged_integrals",
            "crack_facets", "WaterCrackTerm"]
 
 UNIT_WEIGHT = 9810.0  # N/m³: fresh water, 1000 kg/m³ × 9.81 m/s²
@@ -165,31 +163,6 @@ def water_table(gravity: Sequence[float] | np.ndarray, level: float | None = Non
     return WaterTable(at, n, up, float(unit_weight), tuple(out))
 
 
-def one_side(record: ContactRecord) -> np.ndarray:
-    """(n,) bool: the contacts whose bonds make up each joint: those of one side of each block pair, the side
-    whose bonds sum less (the lower-numbered block's where they are equal).
-
-    Where two faces overlap in part, the corners of each that lie on the other both give shares of their own
-    face (a wedge on a larger slab whose corner touches the wedge's face: 116.8 m² of bond for a 53.6 m²
-    face); the smaller face's corners are those that lie on the larger one, and where two equal faces
-    coincide either side's corners give the whole."""
-    bond = record.bond
-    if len(bond) == 0:
-        return np.zeros(0, dtype=bool)
-    n_blocks = int(max(record.block_a.max(), record.block_b.max())) + 1
-    low, high = np.minimum(record.block_a, record.block_b), np.maximum(record.block_a, record.block_b)
-    side = (record.block_a == high).astype(np.int64)  # 0: the corner is the lower-numbered block's
-    groups, index = np.unique((low * n_blocks + high) * 2 + side, return_inverse=True)
-    sums = np.bincount(index, weights=bond, minlength=len(groups))
-    sums[sums <= 0.0] = np.inf  # a side without bonds does not count
-    _, pair = np.unique(groups // 2, return_inverse=True)
-    least = np.full(pair.max() + 1, np.inf)
-    np.minimum.at(least, pair, sums)
-    first = np.full(len(least), len(groups))  # the first group of each pair at its least sum
-    np.minimum.at(first, pair, np.where(sums == least[pair], np.arange(len(groups)), len(groups)))
-    return (np.arange(len(groups)) == first[pair])[index]
-
-
 def face_pressures(water: WaterTable, vertices: np.ndarray, faces: np.ndarray,
                    facets: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
     """∫p dA (m,) over each of ``faces`` (the ``boundary_simplices`` face numbers) at ``vertices``: exact, the
@@ -202,28 +175,6 @@ def face_pressures(water: WaterTable, vertices: np.ndarray, faces: np.ndarray,
     total = np.zeros((len(wanted), x.shape[-1]))
     np.add.at(total, np.searchsorted(wanted, simplex_face[mine]), integral[:, None] * area_vectors(x))
     return water.unit_weight * np.linalg.norm(total, axis=1)[back]
-
-
-def contact_water(water: WaterTable, record: ContactRecord, distance: float, vertices: np.ndarray,
-                  facets: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
-    """The water force (n,) of every contact of ``record`` at ``vertices``, N (per m in 2D): the water on the
-    faces of a that make up its bond (``record.bond_faces``), each face's exact ∫p dA shared among its corners
-    as the bond shares its area, from one side of each joint (:func:`one_side`); zero on a crack's plane (a
-    contact within ``distance`` of it, its normal along the crack's). ``facets``: ``boundary_simplices``.
-    Without ``bond_faces``, p(x_a) × bond."""
-    if record.bond_faces is None:
-        force = water.pressure(record.point_a) * record.bond
-    else:
-        owner, face, share = record.bond_faces
-        force = np.bincount(owner, weights=share * face_pressures(water, vertices, face, facets),
-                            minlength=len(record))
-    force = np.where(one_side(record), force, 0.0)
-    for crack in water.cracks:  # a few planes, each a whole-array test
-        n = np.asarray(crack.normal)
-        on = (np.abs((record.point_a - np.asarray(crack.point)) @ n) <= distance) \
-            & (np.abs(record.normal @ n) >= PARALLEL)
-        force[on] = 0.0
-    return force
 
 
 def submerged_integrals(points: np.ndarray, head: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -25,7 +25,6 @@ import numpy as np
 from numba import njit
 
 from ..assembly.system import BlockSystem, scatter_add
-from ..constraints.water import contact_water
 from ..geometry.facets import boundary_simplices
 from ..model import ModelArrays
 from ..term import LEDGER, StepContext, StepCut, Term
@@ -38,6 +37,7 @@ from .openclose import (LOCKED, OPEN, SLIDING, deepest_penetration, magnitudes, 
                         negligible_force, never_held, next_states)
 from .penalty import ContactSprings, directional_rows, is_large
 from .record import ContactRecord, match_previous
+from .water import contact_water
 
 if TYPE_CHECKING:
     from ..state import State

@@ -68,6 +68,7 @@ from typing import IO
 import h5py
 import numpy as np
 
+from .._version import __version__
 from ..constraints.data import links_to_flat
 from ..model import Model, ModelArrays
 from ..ledger import ENERGY_NAMES
@@ -170,8 +171,6 @@ def _flush_bytes(rows: Mapping[str, list[np.ndarray]], state: State | None) -> i
 
 def _versions() -> dict[str, str]:
     import scipy
-
-    from .. import __version__
 
     return {"srdda": __version__, "python": platform.python_version(), "numpy": np.__version__,
             "scipy": scipy.__version__, "h5py": h5py.__version__, "hdf5": h5py.version.hdf5_version,
@@ -555,8 +554,6 @@ class ResultsStore:
             last_step = point.last_step
         f.attrs.update({"format_version": FORMAT_VERSION, "last_step": last_step, "flush_every": self.flush_every,
                         "contact_every": self.contact_every})
-        from .. import __version__
-
         for name, text in (("format", FORMAT), ("method", self.settings.method), ("status", "running"),
                            ("created", datetime.datetime.now(datetime.timezone.utc).isoformat()),
                            ("srdda_version", __version__)):
