@@ -1,0 +1,35 @@
+"""Writes reference/cli.md at build time from the `srdda` command itself (mkdocs-gen-files).
+
+The command group is found through `srdda.__main__` (what `python -m srdda` runs), not by the module
+path of the CLI, so the page follows the program wherever its code lives and cannot drift from it:
+each section is the `--help` text click prints for that command.
+"""
+from __future__ import annotations
+
+import importlib
+
+import click
+import mkdocs_gen_files
+
+main: click.Group = importlib.import_module("srdda.__main__").main
+
+
+def _help(command: click.Command, name: str) -> str:
+    """The help text `srdda NAME --help` prints, at a fixed width so the page does not depend on the terminal."""
+    parent = click.Context(main, info_name="srdda")
+    ctx = click.Context(command, info_name=name, parent=parent, terminal_width=100, max_content_width=100)
+    return command.get_help(ctx)
+
+
+lines = ["# CLI reference", "",
+         "Generated when the manual is built, from the `srdda` program itself: each section is what",
+         "`srdda COMMAND --help` prints. The guide to the commands, with examples and exit codes, is",
+         "[Command line](../cli.md).", "", "## `srdda`", "", "```text",
+         main.get_help(click.Context(main, info_name="srdda", terminal_width=100, max_content_width=100)),
+         "```", ""]
+for name in sorted(main.commands):
+    lines += [f"## `srdda {name}`", "", "```text", _help(main.commands[name], name), "```", ""]
+
+with mkdocs_gen_files.open("reference/cli.md", "w") as page:
+    page.write("\n".join(lines))
+mkdocs_gen_files.set_edit_path("reference/cli.md", "gen_cli.py")
