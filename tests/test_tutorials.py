@@ -1,4 +1,4 @@
-"""The tutorials (docs/tutorials/) run as written and show what a user sees.
+"""The tutorials (docs/tutorials/) and Getting started run as written and show what a user sees.
 
 Each page is run top to bottom in an empty folder that sees the repository's examples/: every
 `$ srdda ...` line of a ```console block is run through `python -m srdda`, and the lines the page
@@ -22,6 +22,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 TUTORIALS = sorted(p for p in (ROOT / "docs" / "tutorials").glob("*.md") if p.name != "index.md")
+RUNNABLE = [ROOT / "docs" / "getting-started.md", *TUTORIALS]
 BLOCK = re.compile(r"^```(\w+)\n(.*?)^```", flags=re.M | re.S)
 
 
@@ -53,7 +54,7 @@ def run_console(block: str, where: str) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("page", TUTORIALS, ids=lambda page: page.stem)
+@pytest.mark.parametrize("page", RUNNABLE, ids=lambda page: page.stem)
 def test_the_tutorial_runs_as_written(page: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     (tmp_path / "examples").symlink_to(ROOT / "examples")
     (tmp_path / "src").symlink_to(ROOT / "src")  # quake-bolted-block.toml names its record by a path into src/
