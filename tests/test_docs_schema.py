@@ -75,13 +75,18 @@ def schema_tables() -> dict[str, type[BaseModel]]:
 
 
 def documented_tables() -> dict[str, dict[str, str]]:
-    """The reference of docs/model-file.md: table path -> {field: default cell}."""
-    text = (DOCS / "model-file.md").read_text(encoding="utf-8")
-    reference = text[text.index("\n## Reference"):]
+    """The reference of the model file, docs/model-file/*.md (a `## ` heading per table, each page linked from
+    docs/model-file.md's *Reference*): table path -> {field: default cell}."""
+    index = (DOCS / "model-file.md").read_text(encoding="utf-8")
+    pages = sorted((DOCS / "model-file").glob("*.md"))
+    assert pages and all(f"(model-file/{page.name})" in index[index.index("\n## Reference"):] for page in pages)
+    reference = "\n".join(page.read_text(encoding="utf-8") for page in pages)
     out: dict[str, dict[str, str]] = {}
     current: list[str] = []
     for line in reference.splitlines():
-        if line.startswith("### "):
+        if line.startswith("# "):
+            current = []  # a page's title names no table
+        if line.startswith("## "):
             current = ([""] if "Top level" in line else
                        [t.replace(".<name>", "") for t in re.findall(r"`\[{1,2}([\w.<>]+)\]{1,2}`", line)])
             assert current, f"heading names no table: {line}"

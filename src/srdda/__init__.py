@@ -3,6 +3,7 @@
 The three methods of Fan, Zheng & Zhao (2017): Shi's DDA (``dda0``), DDA with
 post-adjusted rotations (``dda1``) and SRDDA (``srdda``). SI units throughout.
 
+```python
 >>> import srdda
 >>> m = srdda.Model(gravity=(0.0, -9.81))
 >>> _ = m.add_material("rock", srdda.Material(density=2500.0, young=1e9, poisson=0.25))
@@ -10,6 +11,8 @@ post-adjusted rotations (``dda1``) and SRDDA (``srdda``). SI units throughout.
 >>> res = srdda.run(m, srdda.RunSettings(dt=1e-3, n_steps=10))
 >>> res.completed
 True
+
+```
 """
 from . import threads as _threads  # first: how numba's threads wait, before they start (srdda.threads)
 from ._version import __version__
