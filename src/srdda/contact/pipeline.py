@@ -542,9 +542,7 @@ class ContactModel:
         dragged = kept & record.draggable
         dragged[kept] &= previous.state[src] == SLIDING
         cap = response.friction[dragged] * previous.normal_force[old[dragged]] / response.shear_stiffness[dragged]
-        drag = np.zeros((n, k))
-        drag[dragged] = cap[:, None] * previous.direction[old[dragged]]
-        reference[dragged] += record.reference_shift(drag)[dragged]
+        reference[dragged] += record.reference_shift(cap[:, None] * previous.direction[old[dragged]], dragged)
         return ContactStep(record, self.kind, self.params, response, self.law, state, direction, reference, bonded,
                            normal_force)
 

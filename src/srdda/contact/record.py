@@ -70,11 +70,12 @@ class ContactRecord:
         r_b = self.anchor_b + np.einsum("nk,nki->ni", reference, self.axes_b)
         return r_a, r_b
 
-    def reference_shift(self, shear_change: np.ndarray) -> np.ndarray:
-        """The change of the references (n, k) that changes the springs' shears by ``shear_change`` (n, k):
-        M·Δρ = Δs with M_ji = e_j·(axes_a_i − axes_b_i) (2D: −|edge|; vertex-face: minus the face's two edges; edge-edge: the two edges
-        seen in the frame), in the configuration of the record."""
-        m = np.einsum("nji,nki->njk", self.frame, self.axes_a - self.axes_b)
+    def reference_shift(self, shear_change: np.ndarray, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
+        """The change of the references that changes the springs' shears by ``shear_change`` (one row per
+        contact of ``rows``, all by default): M·Δρ = Δs with M_ji = e_j·(axes_a_i − axes_b_i) (2D: −|edge|;
+        vertex-face: minus the face's two edges; edge-edge: the two edges seen in the frame), in the
+        configuration of the record."""
+        m = np.einsum("nji,nki->njk", self.frame[rows], self.axes_a[rows] - self.axes_b[rows])
         return np.linalg.solve(m, shear_change[..., None])[..., 0]
 
     def shear(self, reference: np.ndarray) -> np.ndarray:
