@@ -106,8 +106,8 @@ def test_the_walk_finds_a_leak(tmp_path):
 
 # Modules below the step: the state, the term interface and everything the terms are made of.
 BELOW_THE_STEP = ("kinematics/", "geometry/", "assembly/", "constraints/", "contact/", "integrators/", "term.py",
-                  "state.py", "settings.py", "model.py", "ledger.py", "results.py", "solvers/", "history.py",
-                  "units.py", "stages.py")
+                  "state.py", "settings.py", "model.py", "modeldata/", "ledger.py", "results.py", "solvers/",
+                  "history.py", "units.py", "stages.py")
 ABOVE = {"srdda.step", "srdda.simulation"}
 
 

@@ -46,8 +46,8 @@ from .modeldata.water import WaterTable, water_table
 from .settings import RunSettings
 from .state import State
 
-__all__ = ["Stage", "StagePlan", "StagedModel", "StageMark", "Change", "CHANGES", "STAGE_KINDS", "resolve_stages", "initial_mark",
-           "stage_mark", "stage_arrays", "at_rest"]
+__all__ = ["Stage", "StagePlan", "StagedModel", "StageMark", "Change", "CHANGES", "STAGE_KINDS", "resolve_stages",
+           "initial_mark", "stage_mark", "stage_arrays", "at_rest"]
 
 STAGE_KINDS = ("equilibrium", "dynamic")
 CARRIED = "stage"  # the stage mark's key in State.carried (srdda.staging.StageTerm carries it)

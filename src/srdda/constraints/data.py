@@ -6,5 +6,5 @@ from __future__ import annotations
 from ..modeldata.constraints import (BoltSpec, ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec,
                                      compile_links, links_from_flat, links_to_flat)
 
-__all__ = ["HingeSpec", "SpringSpec", "PrescribedSpec", "BoltSpec", "ConstraintArrays", "compile_links", "links_to_flat",
-           "links_from_flat"]
+__all__ = ["HingeSpec", "SpringSpec", "PrescribedSpec", "BoltSpec", "ConstraintArrays", "compile_links",
+           "links_to_flat", "links_from_flat"]

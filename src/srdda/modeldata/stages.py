@@ -16,7 +16,8 @@ __all__ = ["StagePlan"]
 
 @dataclass(frozen=True)
 class StagePlan:
-    """A stage resolved against its model: ``changes`` by :data:`srdda.stages.CHANGES` key, as JSON-able values (indices)."""
+    """A stage resolved against its model: ``changes`` by :data:`srdda.stages.CHANGES` key, as JSON-able values
+    (indices)."""
 
     name: str
     kind: str
