@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .constraints.loads import point_load_forces
-from .model import ModelArrays
+from .modeldata.arrays import ModelArrays
 from .state import State
 from .term import StepContext, Term
 

@@ -52,7 +52,7 @@ import numpy as np
 from .energy_names import ENERGY_KINDS, ENERGY_NAMES, LEDGER
 
 if TYPE_CHECKING:
-    from .model import ModelArrays
+    from .modeldata.arrays import ModelArrays
     from .state import State
     from .term import Term
 

@@ -3,40 +3,39 @@
 A :class:`Model` is built with ``add_*`` methods (or read from a model file by
 :mod:`srdda.io`) and compiled by :meth:`Model.arrays` into flat numpy arrays
 that the time loop uses. Units are SI: m, kg, s, N, Pa.
+
+The records it builds from and compiles into (:class:`ModelArrays`, :class:`Material`, :class:`JointMaterial`,
+:class:`JointTable`, :class:`ModelError`, ...) are defined in :mod:`srdda.modeldata`, below the terms that name
+them, and re-exported here.
 """
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from functools import cached_property
-from operator import attrgetter
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any
 
 import numpy as np
 import shapely
 
 from .constraints.checks import redundant_constraints, unheld_massless_blocks
-from .constraints.data import BoltSpec, ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
-from .constraints.water import UNIT_WEIGHT, WaterTable, crack_facets, water_table
-from .history import HistoryError, MotionHistory, TimeHistory
-from .geometry.polygon import BlockMoments, block_moments, next_vertex_index, normalize_polygon, overlapping_pairs
-from .geometry.polyhedron import (PolyhedronMesh, PolyhedronMoments, normalize_polyhedra, normalize_polyhedron,
-                                  PolyhedronError, box, polyhedron_covers, polyhedron_moments, prism)
+from .constraints.water import crack_facets
+from .history import HistoryError, MotionHistory
+from .geometry.polygon import next_vertex_index, normalize_polygon, overlapping_pairs
+from .geometry.polyhedron import (PolyhedronMesh, normalize_polyhedra, normalize_polyhedron,
+                                  PolyhedronError, box, polyhedron_covers, prism)
 from .kinematics.blocktype import PLANE, SOLID, BlockType, block_type_of_dimension
 from .kinematics.shape3d import elasticity_matrix_3d
 from .kinematics.update2d import rotate_symmetric_components
 from .kinematics.update3d import rotate_symmetric_components_3d
-
-if TYPE_CHECKING:
-    from .stages import Stage, StagePlan
+# the records (srdda.modeldata) keep this path; RENAMED_FIELDS and ConstraintArrays are only re-exported here
+from .modeldata.arrays import RENAMED_FIELDS, AttachedPoints, Load, ModelArrays
+from .modeldata.constraints import BoltSpec, ConstraintArrays, HingeSpec, PrescribedSpec, SpringSpec, compile_links
+from .modeldata.materials import JointMaterial, JointTable, Material, ModelError, PlaneKind, elasticity_matrix
+from .modeldata.water import UNIT_WEIGHT, WaterTable, water_table
+from .stages import Stage, resolve_stages
 
 __all__ = ["AttachedPoints", "JointMaterial", "JointTable", "Material", "Model", "ModelArrays", "ModelError", "Load",
            "PlaneKind", "elasticity_matrix"]
-
-
-class ModelError(ValueError):
-    """The model is inconsistent (the message names the item and the problem)."""
 
 
 def _finite(values: Sequence[float] | float, what: str) -> tuple[float, ...]:
@@ -45,103 +44,6 @@ def _finite(values: Sequence[float] | float, what: str) -> tuple[float, ...]:
     if not all(np.isfinite(numbers)):
         raise ModelError(f"{what} must be finite numbers, got {list(numbers)}")
     return numbers
-
-
-PlaneKind = Literal["stress", "strain"]  # a 2D model's plane stress or plane strain
-
-
-@dataclass(frozen=True)
-class Material:
-    """Block material. ``density`` kg/m³, ``young`` Pa, ``poisson`` (-), 2D idealisation."""
-
-    density: float
-    young: float
-    poisson: float
-    plane: PlaneKind = "stress"
-
-    def __post_init__(self) -> None:
-        if not 0 <= self.density < np.inf:
-            raise ModelError(f"material density must be finite and >= 0, got {self.density}")
-        if not 0 < self.young < np.inf:
-            raise ModelError(f"material young must be finite and > 0, got {self.young}")
-        upper = 0.5 if self.plane == "stress" else 0.5
-        if not -1.0 < self.poisson < upper:
-            raise ModelError(f"material poisson must lie in (-1, 0.5), got {self.poisson}")
-        if self.plane not in ("stress", "strain"):
-            raise ModelError(f"material plane must be 'stress' or 'strain', got {self.plane!r}")
-
-
-@dataclass(frozen=True)
-class JointMaterial:
-    """Mohr-Coulomb joint: friction angle (degrees), cohesion (Pa), tensile strength (Pa), and optionally
-    its normal and shear stiffness per unit area (Pa/m, as UDEC's and 3DEC's joint kn and ks), and optionally
-    its normal restitution e_n in (0, 1]: the ratio of rebound to approach speed of an impact on the joint.
-
-    Without stiffnesses a contact on the joint takes the run's contact penalty
-    (``contact_penalty``, N/m per contact: per metre of thickness in 2D), the
-    shear stiffness ``shear_ratio`` × that; with them, a contact's springs are
-    the joint's stiffness × the joint area it stands for (docs/contacts.md,
-    "Contact stiffness"). A shear stiffness needs a normal one. Without a
-    restitution an impact loses what the time step makes it lose (Shi's
-    spring, docs/contacts.md, "Impacts and restitution").
-    """
-
-    friction_angle: float = 0.0
-    cohesion: float = 0.0
-    tensile_strength: float = 0.0
-    normal_stiffness: float | None = None
-    shear_stiffness: float | None = None
-    restitution: float | None = None
-
-    def __post_init__(self) -> None:
-        if not 0.0 <= self.friction_angle < 90.0:
-            raise ModelError(f"joint friction_angle must lie in [0, 90) degrees, got {self.friction_angle}")
-        if not 0 <= self.cohesion < np.inf:
-            raise ModelError(f"joint cohesion must be finite and >= 0, got {self.cohesion}")
-        if not 0 <= self.tensile_strength < np.inf:
-            raise ModelError(f"joint tensile_strength must be finite and >= 0, got {self.tensile_strength}")
-        for name in ("normal_stiffness", "shear_stiffness"):
-            value = getattr(self, name)
-            if value is not None and not 0 < value < np.inf:
-                raise ModelError(f"joint {name} must be finite and > 0 (Pa/m), got {value}")
-        if self.shear_stiffness is not None and self.normal_stiffness is None:
-            raise ModelError("joint shear_stiffness needs a normal_stiffness (Pa/m) too")
-        if self.restitution is not None and not 0.0 < self.restitution <= 1.0:
-            raise ModelError(f"joint restitution must lie in (0, 1], got {self.restitution}")
-
-
-@dataclass(frozen=True)
-class JointTable:
-    """The model's joint materials as arrays, one row per joint (row 0: the default joint)."""
-
-    friction_angle: np.ndarray  # (nj,) rad
-    cohesion: np.ndarray  # (nj,) Pa
-    tensile_strength: np.ndarray  # (nj,) Pa
-    normal_stiffness: np.ndarray  # (nj,) Pa/m; nan: the run's contact penalty
-    shear_stiffness: np.ndarray  # (nj,) Pa/m; nan: shear_ratio × the normal stiffness
-    restitution: np.ndarray  # (nj,) normal restitution e_n; nan: none (Shi's spring)
-
-    @classmethod
-    def of(cls, joints: Sequence[JointMaterial]) -> JointTable:
-        def column(name: str) -> np.ndarray:
-            return np.array([np.nan if getattr(j, name) is None else getattr(j, name) for j in joints], dtype=float)
-
-        return cls(np.radians([j.friction_angle for j in joints]), column("cohesion"), column("tensile_strength"),
-                   column("normal_stiffness"), column("shear_stiffness"), column("restitution"))
-
-
-def elasticity_matrix(mat: Material) -> np.ndarray:
-    """D relating (σx, σy, τxy) to (εx, εy, γxy), plane stress or plane strain."""
-    E, nu = mat.young, mat.poisson
-    if mat.plane == "stress":
-        c = E / (1 - nu * nu)
-        return c * np.array([[1, nu, 0], [nu, 1, 0], [0, 0, (1 - nu) / 2]])
-    c = E / ((1 + nu) * (1 - 2 * nu))
-    return c * np.array([[1 - nu, nu, 0], [nu, 1 - nu, 0], [0, 0, (1 - 2 * nu) / 2]])
-
-
-
-Load = TimeHistory  # a force (N) as a function of time: constant, table, sine or callable of t
 
 
 @dataclass
@@ -155,125 +57,6 @@ class _Block:
     edge_joints: tuple[str | None, ...] | None = None  # joint material of edge i (vertex i to i+1)
     faces: list[np.ndarray] | None = None  # a polyhedron's outward faces (3D); None for a polygon
     face_joints: tuple[str | None, ...] | None = None  # joint material of face i (3D)
-
-
-@dataclass(frozen=True)
-class AttachedPoints:
-    """The points attached to blocks, one row each, and which rows are which (see :meth:`Model.arrays`).
-
-    Shapes for a 2D model; a 3D model's points have 3 coordinates. The rows
-    are, in order: the fixed points, the point loads, the point springs'
-    ends a, their ends b, the measured points, then the points of the links
-    (hinges, springs with dashpots, driven points, bolts), whose rows
-    :class:`~srdda.constraints.data.ConstraintArrays` holds. The time loop
-    moves every row with its block (``State.points``).
-    """
-
-    point_position: np.ndarray  # (np, 2) 2D, (np, 3) 3D: m, where each point is in the model as built
-    point_block: np.ndarray  # (np,) int: the block carrying each point
-    fixed_rows: np.ndarray  # (nfix,) int: the fixed points (pinned by a penalty spring to where they start)
-    fixed_stiffness: np.ndarray  # (nfix,) N/m; nan: the run's penalty
-    load_rows: np.ndarray  # (nload,) int: the points a point load acts at
-    load_force: tuple[Load, ...]  # (nload,): each load's force (N, 2 components in 2D, 3 in 3D) against time
-    point_spring_rows_a: np.ndarray  # (nps,) int: end a of each point spring (zero length, Model.add_point_spring)
-    point_spring_rows_b: np.ndarray  # (nps,) int: its end b
-    point_spring_stiffness: np.ndarray  # (nps,) N/m
-    measured_rows: np.ndarray  # (nmp,) int: the measured points (recorded every step)
-
-
-@dataclass(frozen=True)
-class ModelArrays:
-    """The model as flat arrays for the time loop (see :meth:`Model.arrays`).
-
-    Fields are named ``object_field`` (as MuJoCo's ``mjModel``): the prefix
-    says what the rows are (``block_``: nb blocks, ``vertex_``: nv vertices,
-    ``edge_``: the nv edges of 2D blocks, ``face_``: nf faces of 3D blocks,
-    ``material_``: nm block materials); shapes are given for 2D, then 3D.
-    The points attached to blocks (fixed, loaded, tied by point springs,
-    measured, and the links' points) are the record ``attached``; hinges,
-    springs with dashpots, driven points and bolts the record ``links``;
-    the joint materials the record ``joints``.
-    """
-
-    # -- blocks and their vertices
-    vertex_position: np.ndarray  # (nv, 2) 2D, (nv, 3) 3D: m, every block's vertices, block after block
-    block_ptr: np.ndarray  # (nb + 1,) int: block i's vertices are rows block_ptr[i]:block_ptr[i + 1]
-    vertex_block: np.ndarray  # (nv,) int: the block of each vertex
-    vertex_next: np.ndarray  # (nv,) int: the next vertex of the same block, cyclically (2D: counter-clockwise)
-    block_density: np.ndarray  # (nb,) kg/m³ as built (block_mass is conserved)
-    block_elasticity: np.ndarray  # (nb, 3, 3) 2D (plane stress or strain), (nb, 6, 6) 3D: Pa, stress = D·strain
-    block_compliance: np.ndarray  # (nb, 3, 3) 2D, (nb, 6, 6) 3D: 1/Pa, the inverse of block_elasticity
-    block_velocity: np.ndarray  # (nb, 6) 2D (vx, vy, ω, 3 strain rates 0), (nb, 12) 3D (v, ω, 6 zeros): initial
-    block_stress: np.ndarray  # (nb, 3) 2D (σx, σy, τxy), (nb, 6) 3D (σx, σy, σz, τyz, τzx, τxy): initial, Pa
-    block_fixed: np.ndarray  # (nb,) bool: the block does not move (ground, slope)
-    block_material: np.ndarray  # (nb,) int: index into the model's materials
-    block_names: tuple[str, ...]  # (nb,)
-    gravity: np.ndarray  # (2,) 2D, (3,) 3D: m/s²
-    # -- joints
-    joints: JointTable  # (nj rows): the joint materials, row 0 the default joint
-    material_joint: np.ndarray  # (nm, nm) int: the joint row of a contact between two block materials
-    edge_joint: np.ndarray  # (nv,) int: joint row of the edge vertex -> vertex_next, -1: by materials (3D: all -1)
-    # -- points and links
-    attached: AttachedPoints  # fixed points, point loads, point springs, measured points (rows of np points)
-    links: ConstraintArrays  # hinges, springs with dashpots, driven points, bolts (rows of attached points)
-    mesh: PolyhedronMesh | None = None  # the faces (nf) of 3D blocks; None in 2D
-    face_joint: np.ndarray | None = None  # (nf,) int 3D: joint row of each mesh face, -1: by materials; None 2D
-    water: WaterTable | None = None  # the water table (docs/water.md); change it with dataclasses.replace
-    block_removed: np.ndarray | None = None  # (nb,) bool: excavated by a stage (held, touches nothing); None: none
-    stages: tuple[StagePlan, ...] = ()  # the staged analysis (srdda.stages), resolved; () runs as one stage
-    base: ModelArrays | None = None  # of a stage's arrays: the model as built (what a results file stores)
-
-    @property
-    def n_blocks(self) -> int:
-        return len(self.block_ptr) - 1
-
-    @cached_property
-    def block_mass(self) -> np.ndarray:
-        """Mass (nb,) of every block: density × volume of the model as built (kg per m of thickness in 2D).
-
-        Mass is conserved: when a method changes a block's volume (dda0's rotation
-        stretch, elastic strain) its density changes, not its mass.
-        """
-        return self.block_density * self.moments(self.vertex_position).volume
-
-    @property
-    def block_type(self) -> BlockType:
-        """The blocks' type, by the dimension of the vertices."""
-        return block_type_of_dimension(self.vertex_position.shape[1])
-
-    def moments(self, vertices: np.ndarray) -> BlockMoments | PolyhedronMoments:
-        """Exact block integrals of a configuration of this model's blocks (polygons, or polyhedra in 3D)."""
-        if self.mesh is not None:
-            return polyhedron_moments(vertices, self.mesh)
-        return block_moments(vertices, self.block_ptr, self.vertex_block, self.vertex_next)
-
-
-# ModelArrays' field names of srdda 0.1 -> where the value is now: read-only, deprecated for one release
-RENAMED_FIELDS = {
-    "vertices": "vertex_position", "next_vertex": "vertex_next", "density": "block_density",
-    "elasticity": "block_elasticity", "compliance": "block_compliance", "velocity": "block_velocity",
-    "stress": "block_stress", "joint_by_materials": "material_joint", "points": "attached.point_position",
-    "point_block": "attached.point_block", "fixed_rows": "attached.fixed_rows",
-    "fixed_stiffness": "attached.fixed_stiffness", "load_rows": "attached.load_rows", "loads": "attached.load_force",
-    "spring_rows_a": "attached.point_spring_rows_a", "spring_rows_b": "attached.point_spring_rows_b",
-    "spring_stiffness": "attached.point_spring_stiffness", "measured_rows": "attached.measured_rows",
-}
-
-
-def _deprecated_field(old: str, new: str) -> property:
-    """A read-only property ``old`` of ModelArrays giving ``new`` (a dotted path) with a DeprecationWarning."""
-    get = attrgetter(new)
-
-    def value(self: ModelArrays) -> object:
-        warnings.warn(f"ModelArrays.{old} is deprecated (renamed in srdda 0.2, removed in 0.3): use "
-                      f"ModelArrays.{new}", DeprecationWarning, stacklevel=2)
-        return get(self)
-
-    return property(value, doc=f"Deprecated: ModelArrays.{new}.")
-
-
-for _old, _new in RENAMED_FIELDS.items():  # set after the class so that type checkers flag the old names
-    setattr(ModelArrays, _old, _deprecated_field(_old, _new))
 
 
 @dataclass
@@ -826,8 +609,6 @@ class Model:
     # -- compiling ---------------------------------------------------------
     def arrays(self) -> ModelArrays:
         """Flat arrays of the whole model for the time loop: its block, joint and point parts."""
-        from .stages import resolve_stages  # stages name blocks, bolts and materials of this model
-
         if not self.blocks:
             raise ModelError("the model has no blocks")
         bt = block_type_of_dimension(self.dim)

@@ -17,7 +17,7 @@ import numpy as np
 
 from .constraints.bolts import bolt_forces, bolt_state
 from .energy_names import CUT_CAUSES
-from .model import ModelArrays
+from .modeldata.arrays import ModelArrays
 from .state import State
 
 __all__ = ["Recorder", "Result", "measured_points", "bolt_histories"]

@@ -31,24 +31,58 @@ import dataclasses
 import fnmatch
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Literal
+from typing import Any, Literal, Protocol
 
 import numpy as np
 from pydantic import ValidationError
 
-from .constraints.water import water_table
 from .equilibrium import RATIO_TOLERANCE
 from .history import HistoryError, TimeHistory
 from .kinematics.shape3d import elasticity_matrix_3d
-from .model import JointMaterial, JointTable, Material, Model, ModelArrays, ModelError, elasticity_matrix
+from .modeldata.arrays import ModelArrays
+from .modeldata.materials import JointMaterial, JointTable, Material, ModelError, elasticity_matrix
+from .modeldata.stages import StagePlan
+from .modeldata.water import WaterTable, water_table
 from .settings import RunSettings
 from .state import State
 
-__all__ = ["Stage", "StagePlan", "StageMark", "Change", "CHANGES", "STAGE_KINDS", "resolve_stages", "initial_mark",
-           "stage_mark", "stage_arrays", "at_rest"]
+__all__ = ["Stage", "StagePlan", "StagedModel", "StageMark", "Change", "CHANGES", "STAGE_KINDS", "resolve_stages",
+           "initial_mark", "stage_mark", "stage_arrays", "at_rest"]
 
 STAGE_KINDS = ("equilibrium", "dynamic")
 CARRIED = "stage"  # the stage mark's key in State.carried (srdda.staging.StageTerm carries it)
+
+
+class _Named(Protocol):
+    @property
+    def name(self) -> str: ...
+
+
+class StagedModel(Protocol):
+    """What a stage's names are resolved against: the model's blocks, bolts, materials, joint materials, water
+    and gravity (:class:`srdda.model.Model` is one; the builder compiles its stages with :func:`resolve_stages`,
+    so this module names the builder only through this protocol)."""
+
+    @property
+    def blocks(self) -> Sequence[_Named]: ...
+
+    @property
+    def bolts(self) -> Sequence[_Named]: ...
+
+    @property
+    def materials(self) -> Mapping[str, Material]: ...
+
+    @property
+    def joint_materials(self) -> Mapping[str, JointMaterial]: ...
+
+    @property
+    def water(self) -> WaterTable | None: ...
+
+    @property
+    def gravity(self) -> Sequence[float]: ...
+
+    @property
+    def dim(self) -> int: ...
 
 
 @dataclass(frozen=True)
@@ -109,26 +143,6 @@ class Stage:
 
 
 @dataclass(frozen=True)
-class StagePlan:
-    """A stage resolved against its model: ``changes`` by :data:`CHANGES` key, as JSON-able values (indices)."""
-
-    name: str
-    kind: str
-    changes: Mapping[str, Any]
-    run: Mapping[str, Any]
-    tolerance: float
-    max_steps: int
-    reset_displacements: bool
-
-    def to_json(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
-
-    @staticmethod
-    def from_json(data: Mapping[str, Any]) -> StagePlan:
-        return StagePlan(**data)
-
-
-@dataclass(frozen=True)
 class StageMark:
     """Where a staged run is (carried in ``State.carried["stage"]``, checkpointed): the stage, its first step
     and start time, and what its changes fixed at the stages' starts (module doc)."""
@@ -151,7 +165,7 @@ class Change:
     ``mark(mark, arrays, state, value)``: what the change fixes at the stage's start (optional).
     """
 
-    resolve: Callable[[Model, Any, str], Any]
+    resolve: Callable[[StagedModel, Any, str], Any]
     arrays: Callable[[ModelArrays, Any, StageMark], ModelArrays] | None = None
     state: Callable[[ModelArrays, State, Any], State] | None = None
     mark: Callable[[StageMark, ModelArrays, State, Any], StageMark] | None = None
@@ -159,7 +173,7 @@ class Change:
 
 
 # -- the changes -------------------------------------------------------------------------------------------
-def _blocks(model: Model, names: Sequence[str], where: str) -> list[int]:
+def _blocks(model: StagedModel, names: Sequence[str], where: str) -> list[int]:
     """Indices of the blocks ``names`` name (a name or a shell pattern: a group); ModelError naming ``where``."""
     all_names = [b.name for b in model.blocks]
     chosen: set[int] = set()
@@ -206,7 +220,7 @@ def _hold(arrays: ModelArrays, state: State, value: list[int]) -> State:
     return at_rest(_mask(arrays.n_blocks, value), state)
 
 
-def _resolve_bolts(model: Model, names: Sequence[str], where: str) -> list[int]:
+def _resolve_bolts(model: StagedModel, names: Sequence[str], where: str) -> list[int]:
     bolt_names = [b.name for b in model.bolts]
     out = []
     for name in names:
@@ -227,7 +241,7 @@ def _install(mark: StageMark, arrays: ModelArrays, state: State, value: list[int
     return replace(mark, bolt_active=active, bolt_axis=axis)
 
 
-def _resolve_history(model: Model, value: TimeHistory, where: str) -> dict[str, Any]:
+def _resolve_history(model: StagedModel, value: TimeHistory, where: str) -> dict[str, Any]:
     data = value.to_json()
     if data is None:
         raise ModelError(f"{where}: a Python function cannot be kept in a results file; give a constant, a table "
@@ -264,7 +278,7 @@ def _resolve_named(names: list[str], value: Mapping[str, Any], kind: type[Materi
     return out
 
 
-def _resolve_materials(model: Model, value: Mapping[str, Material], where: str) -> dict[str, dict[str, Any]]:
+def _resolve_materials(model: StagedModel, value: Mapping[str, Material], where: str) -> dict[str, dict[str, Any]]:
     return _resolve_named(list(model.materials), value, Material, "material", where)
 
 
@@ -280,7 +294,7 @@ def _materials(arrays: ModelArrays, value: dict[str, dict[str, Any]], mark: Stag
                    block_compliance=np.linalg.inv(elasticity))
 
 
-def _resolve_joints(model: Model, value: Mapping[str, JointMaterial], where: str) -> dict[str, dict[str, Any]]:
+def _resolve_joints(model: StagedModel, value: Mapping[str, JointMaterial], where: str) -> dict[str, dict[str, Any]]:
     return _resolve_named(list(model.joint_materials), value, JointMaterial, "joint material", where,
                           first_row=1)  # row 0 of the joint table is the default joint
 
@@ -294,7 +308,7 @@ def _joints(arrays: ModelArrays, value: dict[str, dict[str, Any]], mark: StageMa
     return replace(arrays, joints=JointTable(**columns))
 
 
-def _resolve_water_level(model: Model, value: float, where: str) -> float:
+def _resolve_water_level(model: StagedModel, value: float, where: str) -> float:
     if not np.isfinite(value):
         raise ModelError(f"{where}: must be a finite elevation (m), got {value}")
     try:
@@ -340,7 +354,7 @@ def _run_overrides(run: Mapping[str, Any], where: str) -> dict[str, Any]:
     return out
 
 
-def resolve_stages(model: Model, stages: Sequence[Stage]) -> tuple[StagePlan, ...]:
+def resolve_stages(model: StagedModel, stages: Sequence[Stage]) -> tuple[StagePlan, ...]:
     """The stages resolved against ``model`` (names to indices), each problem a ModelError naming its field."""
     plans, seen = [], set()
     for k, stage in enumerate(stages):

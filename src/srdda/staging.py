@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .equilibrium import SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, unbalanced_force, without_ratio
-from .model import ModelArrays
+from .modeldata.arrays import ModelArrays
 from .results import Result
 from .settings import RunSettings
 from .stages import CARRIED, CHANGES, StageMark, StagePlan, at_rest, initial_mark, stage_arrays, stage_mark

@@ -18,7 +18,7 @@ from .geometry.polygon import BlockMoments
 from .geometry.polyhedron import PolyhedronMoments
 from .integrators.methods import Method
 from .energy_names import CUT_CAUSES, LEDGER
-from .model import ModelArrays
+from .modeldata.arrays import ModelArrays
 
 __all__ = ["State", "initial_state", "mass_density"]
 

@@ -29,7 +29,8 @@ from .contact.newton import NewtonContactModel, NewtonContactTerm
 from .contact.pipeline import ContactModel, ContactParameters, ContactTerm
 from .integrators.methods import Method
 from .integrators.secant import SecantPass
-from .model import ModelArrays, ModelError
+from .modeldata.arrays import ModelArrays
+from .modeldata.materials import ModelError
 from .settings import RunSettings
 from .solvers import LinearSolver, SolverError
 from .state import State

@@ -37,7 +37,7 @@ if TYPE_CHECKING:
     from .integrators.methods import Method
     from .integrators.schemes import SchemeCoefficients
     from .kinematics.blocktype import BlockType
-    from .model import ModelArrays
+    from .modeldata.arrays import ModelArrays
     from .state import State
 
 __all__ = ["StepContext", "Term", "StepCut", "CUT_CAUSES", "ENERGY_KINDS", "LEDGER"]

@@ -23,7 +23,7 @@ from ..state import mass_density
 from ..term import StepContext, Term
 
 if TYPE_CHECKING:
-    from ..model import ModelArrays
+    from ..modeldata.arrays import ModelArrays
     from ..state import State
     from .system import BlockSystem
 

@@ -20,7 +20,7 @@ from .springs import SpringTerm
 from .water import WaterCrackTerm
 
 if TYPE_CHECKING:
-    from ..model import ModelArrays
+    from ..modeldata.arrays import ModelArrays
 
 __all__ = ["ConstraintArrays", "HingeSpec", "PrescribedSpec", "SpringSpec", "BoltSpec", "BoltTerm", "bolt_forces", "MotionHistory", "HistoryError",
            "LagrangeTerm", "SpringTerm", "PointLoadTerm", "WaterCrackTerm", "PrescribedPenaltyTerm", "BaseAccelerationTerm",

@@ -36,7 +36,7 @@ from .data import ConstraintArrays
 
 if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
-    from ..model import ModelArrays
+    from ..modeldata.arrays import ModelArrays
     from ..state import State
 
 __all__ = ["BoltTerm", "BoltForces", "BoltState", "bolt_forces", "bolt_state"]

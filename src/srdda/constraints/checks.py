@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from ..model import ModelArrays
+    from ..modeldata.arrays import ModelArrays
 
 __all__ = ["redundant_constraints", "unheld_massless_blocks"]
 

@@ -16,7 +16,7 @@ from ..term import LEDGER, StepContext, Term
 
 if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
-    from ..model import ModelArrays
+    from ..modeldata.arrays import ModelArrays
     from ..state import State
 
 __all__ = ["PointLoadTerm", "point_load_forces"]

@@ -29,7 +29,7 @@ from .lagrange import prescribed_target
 
 if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
-    from ..model import ModelArrays
+    from ..modeldata.arrays import ModelArrays
     from ..state import State
 
 __all__ = ["PrescribedPenaltyTerm", "BaseAccelerationTerm", "penalty_stiffness"]

@@ -33,7 +33,7 @@ from .data import ConstraintArrays
 
 if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
-    from ..model import ModelArrays
+    from ..modeldata.arrays import ModelArrays
     from ..state import State
 
 __all__ = ["SpringTerm", "spring_geometry", "spring_energy", "fixed_point_stiffness"]

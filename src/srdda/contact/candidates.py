@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 
 if TYPE_CHECKING:
-    from ..model import ModelArrays
+    from ..modeldata.arrays import ModelArrays
 
 __all__ = ["block_boxes", "grow_boxes", "boxes_within", "KeptCandidates", "PairFinder", "pair_keys", "push_row", "both_ways"]
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..geometry.polygon import previous_vertex_index
-from ..model import ModelArrays
+from ..modeldata.arrays import ModelArrays
 from .broadphase2d import candidate_pairs_2d
 from .candidates import PairFinder
 from .narrowphase2d import FOUND_EDGE, FOUND_VERTEX, narrow_phase_2d

@@ -25,7 +25,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..geometry.polyhedron import PolyhedronMesh
-from ..model import ModelArrays, ModelError
+from ..modeldata.arrays import ModelArrays
+from ..modeldata.materials import ModelError
 from .broadphase3d import candidate_pairs_3d
 from .candidates import PairFinder
 from .narrowphase3d import EDGE_EDGE, VERTEX_FACE, narrow_phase_3d

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import JointTable
+from ..modeldata.materials import JointTable
 from .openclose import LOCKED
 from .record import ContactRecord
 

@@ -26,7 +26,7 @@ from numba import njit
 
 from ..assembly.system import BlockSystem, scatter_add
 from ..geometry.facets import boundary_simplices
-from ..model import ModelArrays
+from ..modeldata.arrays import ModelArrays
 from ..term import LEDGER, StepContext, StepCut, Term
 from .candidates import pair_keys
 from .detect2d import Detector2D

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from ..model import ModelArrays
+    from ..modeldata.arrays import ModelArrays
 
 __all__ = ["Ground"]
 

@@ -34,7 +34,8 @@ from ..constraints.data import links_from_flat
 from ..geometry.polyhedron import PolyhedronMesh
 from ..integrators.methods import METHODS
 from ..ledger import ENERGY_NAMES
-from ..model import AttachedPoints, JointTable, Load, ModelArrays
+from ..modeldata.arrays import AttachedPoints, Load, ModelArrays
+from ..modeldata.materials import JointTable
 from ..settings import RunSettings
 from ..stages import StagePlan
 from ..state import State
