@@ -4,6 +4,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import inspect
+import pathlib
 import pkgutil
 import re
 import types
@@ -92,3 +93,23 @@ def test_every_name_a_docstring_refers_to_exists() -> None:
                 if not _resolve(path, m, owner, everywhere):
                     unresolved.append(f"{where}: {path}")
     assert not unresolved, "\n".join(sorted(unresolved))
+
+
+SECTION = re.compile(r"(docs/[\w/.-]+\.md)[,:]?\s*\(?\s*\*([^*]+)\*")  # docs/x.md, *A section*
+SOURCE = pathlib.Path(srdda.__file__).parent
+REPO = SOURCE.parents[1]
+
+
+def test_every_manual_section_the_code_names_is_on_that_page() -> None:
+    """``docs/x.md, *Section*`` in the code (docstrings and comments) names a page that has that text: a section
+    that moved to a sub-page or to the development log takes its reference along."""
+    found, missing = 0, []
+    for path in SOURCE.rglob("*.py"):
+        for page, section in SECTION.findall(path.read_text(encoding="utf-8")):
+            found += 1
+            target = REPO / page
+            words = " ".join(section.split())
+            if not target.exists() or words not in " ".join(target.read_text(encoding="utf-8").split()):
+                missing.append(f"{path.relative_to(REPO)}: {page}, *{words}*")
+    assert found > 5  # the pattern matched the references
+    assert not missing, "\n".join(missing)

@@ -217,8 +217,8 @@ class ContactStep:
         none if it was open, at most its tensile strength T if closed, so g_t
         is g₀ capped at 0, or at T/k_n. With g_t = g₀ > 0 the spring would
         pull the blocks across the gap for the part of the step before they
-        touch: ½k_n·g₀² from nothing per impact (docs/contacts.md, *Energy
-        from the α-point force of an impact*).
+        touch: ½k_n·g₀² from nothing per impact (docs/dev/contacts-history.md,
+        *Energy from the α-point force of an impact*).
         """
         gap, response = self.record.gap, self.response
         cap = np.where(self.open_at_start, 0.0, response.tension / response.normal_stiffness)

@@ -5,7 +5,7 @@ springs' rounding.
 Each model is run as two stages: ``equilibrium`` (damped steps until the unbalanced-force ratio is below
 1e-5: srdda.settle) and a dynamic stage with ``reset_displacements``, whose travel (or, for the wall, speed)
 is measured from its start. Rows under ``contact_solver = "newton"`` are checked; the same runs under the
-default open-close are information rows (docs/contacts.md, *At rest from the start*).
+default open-close are information rows (docs/contacts/solve.md, *At rest from the start*).
 """
 from __future__ import annotations
 
