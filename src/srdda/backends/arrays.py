@@ -28,7 +28,7 @@ DEVICES: tuple[DeviceName, ...] = get_args(DeviceName)
 # solvers with a GPU backend: the block-Jacobi conjugate gradient, and ``auto``, whose large systems use it
 GPU_SOLVERS = ("auto", "cg-jacobi")
 # ``device = "auto"`` takes the GPU for models of at least this many blocks (provisional: the GPU's
-# speed against the CPU's is measured by benchmarks/gpu/check.sh, docs/performance.md, *On a GPU*)
+# speed against the CPU's is measured by benchmarks/gpu/check.sh, docs/gpu.md)
 GPU_MIN_BLOCKS = 10_000
 
 
