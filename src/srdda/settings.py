@@ -96,7 +96,7 @@ class RunSettings:
     # of the increment is estimated within this of the exact solution (m): docs/performance.md
     solver_tolerance: Annotated[Metres, Field(gt=0, le=1.0)] = DEFAULT_TOLERANCE
     # where the conjugate gradient runs: "cpu", "gpu" (CuPy and a CUDA GPU, srdda[gpu]) or "auto" (the GPU for
-    # models of GPU_MIN_BLOCKS blocks or more when one is present; docs/performance.md, *On a GPU*)
+    # models of GPU_MIN_BLOCKS blocks or more when one is present; docs/gpu.md)
     device: DeviceName = "auto"
     # The secant pass stops when |Δθ|·|δθ| (δθ: change of the rotation increment between two solves)
     # is below this: the mismatch between the linearised and the exact rotation displacement of a
@@ -119,7 +119,7 @@ class RunSettings:
     contact_distance_factor: Annotated[Ratio, Field(gt=0)] = 2.5  # d0 = factor × g2 × w0
     contact_angle_tolerance: Annotated[Degrees, Field(ge=0, lt=45)] = 3.0  # Shi's angle criterion
     penetration_fraction: Annotated[Ratio, Field(gt=0)] = 0.4  # a step deeper than this × d0 is cut
-    open_close_max_iterations: Annotated[int, Field(ge=1)] = 20  # state-changing solves before a cut
+    open_close_max_iterations: Annotated[int, Field(ge=1)] = 40  # state-changing solves before a cut (docs/contacts.md)
     # Newton's solves of a step before it is cut: a safeguard only (its iteration converges; docs/contacts.md)
     newton_max_iterations: Annotated[int, Field(ge=1)] = 100
     friction_tolerance: Annotated[Ratio, Field(gt=0)] = 1e-3  # relative settling of a sliding normal force
