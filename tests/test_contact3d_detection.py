@@ -70,6 +70,29 @@ def test_cube_resting_on_a_base_has_one_vertex_face_contact_per_bottom_corner():
     np.testing.assert_allclose(geom.gap, 0.01, rtol=1e-12)
 
 
+@pytest.mark.parametrize("lift", [0.0, 0.01, -0.002])
+def test_cubes_face_to_face_have_one_contact_per_corner_pair(lift):
+    """Two cubes stacked corner on corner (cut blocks): each of the 4 corner pairs finds itself from both
+    sides, a corner of each block on the other's face; one contact is kept (the lower block's corner, the
+    smaller index), so the joint has 4 springs, not 8, and its bond area is the face's 1 m², not 2."""
+    arr = _arrays(box((0, 0, -1), (1, 1, 0)), box((0, 0, lift), (1, 1, 1 + lift)), fixed=(0,))
+    found, geom = _detect(arr)
+    assert len(found) == 4 and np.all(found[:, 0] == VERTEX_FACE)
+    assert np.all(found[:, 3] == 0) and np.all(found[:, 4] == 1)  # a corner of block 0 on block 1's face
+    assert sorted(found[:, 1].tolist()) == [4, 5, 6, 7]  # block 0's top corners
+    np.testing.assert_allclose(geom.gap, lift, atol=1e-15)
+    assert geom.bond.sum() == pytest.approx(1.0, rel=1e-12)  # the joint's area, once
+
+
+def test_a_cube_on_a_larger_face_keeps_its_four_corners():
+    """Corners that do not meet corners of the other block are no pair: a cube on a wider base keeps the
+    four contacts of its own corners (the same as without the pairing)."""
+    arr = _arrays(box((-2, -2, -1), (2, 2, 0)), box((0, 0, 0.0), (1, 1, 1)), fixed=(0,))
+    found, geom = _detect(arr)
+    assert sorted(found[:, 1].tolist()) == [8, 9, 10, 11] and np.all(found[:, 3] == 1)
+    assert geom.bond.sum() == pytest.approx(1.0, rel=1e-12)
+
+
 def test_far_cube_is_not_a_contact():
     arr = _arrays(box((-2, -2, -1), (2, 2, 0)), box((0, 0, 2 * D0), (1, 1, 1)))
     assert len(_detect(arr)[0]) == 0

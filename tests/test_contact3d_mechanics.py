@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import srdda
-from srdda.apps.verify.cases.contacts3d import incline_case
+from srdda.apps.verify.cases.contacts3d import (CORNER_PAIR_MASS, CORNER_PAIR_PENALTY, corner_pair_settlement,
+                                                 incline_case)
 from srdda.apps.verify.cases.slope3d import incline_acceleration
 from srdda.contact.openclose import LOCKED, OPEN, SLIDING
 from srdda.contact import ContactModel, ContactParameters, ContactSet
@@ -155,3 +156,12 @@ def test_resume_with_3d_contacts_equals_the_uninterrupted_run(tmp_path: Path):
     records = read_results(path)
     last = records.contacts_at(len(records.contacts["step"]) - 1)
     assert last["point"].shape[1:] == (3,) and last["normal"].shape[1:] == (3,) and last["shear"].shape[1:] == (2,)
+
+
+def test_a_cube_on_an_equal_cube_settles_on_four_springs():
+    """Corner on corner (cut blocks): the joint carries the weight W on one spring per corner pair, so the
+    top cube settles by W/(4 k_n) (srdda verify corner-pairs-3d, whose tolerance says why 1e-4); two springs
+    a corner (each corner found from both blocks) would settle it by half that."""
+    settlement, contacts = corner_pair_settlement("dda0")
+    assert contacts == 4
+    assert settlement == pytest.approx(CORNER_PAIR_MASS * G / (4 * CORNER_PAIR_PENALTY), rel=1e-4)

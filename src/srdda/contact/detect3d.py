@@ -23,6 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..geometry.polyhedron import PolyhedronMesh
 from ..modeldata.arrays import ModelArrays
@@ -187,6 +188,30 @@ def contact_record_3d(vertices: np.ndarray, mesh: PolyhedronMesh, topo: Polyhedr
                          bond=empty, tributary=empty, draggable=on_face)
 
 
+def corner_twins(found: np.ndarray, vertices: np.ndarray, face_normal: np.ndarray, distance: float,
+                 cos_parallel: float) -> np.ndarray:
+    """Which detected contacts (k, 5) are the second spring of a corner pair: a vertex-face contact of a corner
+    of block a on a face of b whose twin, a corner of b within ``distance`` on a face of a, faces it (normals
+    opposite to the angle tolerance). Blocks whose corners coincide (cut or stacked blocks meeting face to face)
+    find each corner from both sides; both springs would double the corner's stiffness and its bond area.
+    The contact kept is the one from the block of the smaller index (2D keeps one contact per corner pair
+    the same way)."""
+    kind, fa, fb, a, b = found.T
+    twin = np.zeros(len(found), dtype=bool)
+    vf = np.flatnonzero(kind == VERTEX_FACE)
+    if len(vf) < 2:
+        return twin
+    near = cKDTree(vertices[fa[vf]]).query_pairs(distance, output_type="ndarray")
+    if len(near) == 0:
+        return twin
+    i, j = vf[near[:, 0]], vf[near[:, 1]]
+    facing = (a[i] == b[j]) & (b[i] == a[j]) \
+        & (np.einsum("ni,ni->n", face_normal[fb[i]], face_normal[fb[j]]) < -cos_parallel)
+    i, j = i[facing], j[facing]
+    twin[np.where(a[i] > b[i], i, j)] = True
+    return twin
+
+
 class Detector3D:
     """Finds the contacts of a configuration of the model's polyhedra (hinged pairs left out)."""
 
@@ -214,6 +239,7 @@ class Detector3D:
                                 topo.neighbour, surface.vertex_convex, topo.block_edge_ptr, topo.edge_v0,
                                 topo.edge_v1, topo.edge_faces, surface.edge_convex, self.distance, self.sin_tol,
                                 self.max_penetration)
+        found = found[~corner_twins(found, vertices, surface.face_normal, self.distance, self.cos_parallel)]
         if len(found) == 0:
             return None
         record = contact_record_3d(vertices, mesh, topo, surface, found, self.key_size)

@@ -8,8 +8,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from .cases.contacts3d import drop_case, incline_case
-from .cases.slope3d import (SLIDE_TOPPLE_CASES, WEDGE_PLANES, SlideToppleCase, incline_acceleration,
+from .cases.contacts3d import CORNER_PAIR_MASS, CORNER_PAIR_PENALTY, corner_pair_settlement, drop_case, incline_case
+from .cases.slope3d import (G, SLIDE_TOPPLE_CASES, WEDGE_PLANES, SlideToppleCase, incline_acceleration,
                              slide_topple_model, wedge_friction_for, wedge_model, wedge_solution)
 from ...integrators.methods import MethodName
 from ...model import Model
@@ -47,6 +47,27 @@ def incline_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
         measured = incline_case(INCLINE_PSI, INCLINE_STICKING, method)
         rows.append(row("incline-3d", f"travel in 1 s after settling (m), φ = {INCLINE_STICKING:g}°", method,
                         measured.travel, 0.0, INCLINE_AT_REST))
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------
+# corner-pairs-3d: a 1 m cube (2500 kg) resting corner on corner on an equal fixed cube, k_n = 1e9 N/m,
+# 40 of Shi's static steps of 1 ms. Each corner pair is found from both blocks; one spring a pair carries
+# the weight W, so the cube settles by W/(4 k_n) (two a pair: half that, and twice the bond area).
+# Tolerance 1e-4: the static steps approach the settlement geometrically (within 2e-6 of it after 20
+# steps) and the blocks' own shortening is 2e-5 of it.
+CORNER_PAIR_SETTLEMENT = 1e-4
+
+
+@case("corner-pairs-3d", dim=3, methods=("srdda", "dda1", "dda0"),
+      description="a cube corner on corner on an equal cube: one spring a corner pair, settlement W/(4 k_n)")
+def corner_pairs_3d(methods: tuple[MethodName, ...], quick: bool) -> list[Row]:
+    rows: list[Row] = []
+    for method in methods:
+        settlement, contacts = corner_pair_settlement(method)
+        rows.append(row("corner-pairs-3d", "settlement (m)", method, settlement,
+                        CORNER_PAIR_MASS * G / (4 * CORNER_PAIR_PENALTY), CORNER_PAIR_SETTLEMENT))
+        rows.append(row("corner-pairs-3d", "closed contacts of the joint", method, contacts, 4.0, 0.0))
     return rows
 
 

@@ -119,6 +119,7 @@ EXPECTED_SECONDS: dict[str, tuple[float, float]] = {
     "newmark": (33.2, 33.2),
     "bolted-block": (12.2, 12.2),
     "incline-3d": (26.2, 26.2),
+    "corner-pairs-3d": (0.5, 0.5),
     "drop-3d": (7.4, 7.4),
     "extruded-incline-3d": (42.1, 42.1),
     "slide-topple-3d": (33.6, 33.6),

@@ -114,3 +114,22 @@ def drop_case(rotation: tuple[float, float, float], method: MethodName, steps: i
     kinetic0 = float(energy[0, names.index("kinetic")])
     scale = kinetic0 + mass * G * float(centroid[2])
     return float(np.max(balance - balance[0]) / scale), float(energy[-1, names.index("dissipated_friction")] / scale)
+
+
+CORNER_PAIR_PENALTY = 1e9  # N/m: k_n of every contact of corner-pairs-3d
+CORNER_PAIR_MASS = 2500.0  # kg: the top cube (1 m³ of 2500 kg/m³)
+
+
+def corner_pair_settlement(method: MethodName, steps: int = 40) -> tuple[float, int]:
+    """(settlement (m), contacts at the end) of a 1 m cube resting corner on corner on an equal fixed cube
+    (cut blocks), after ``steps`` of Shi's static steps (velocity_ratio 0) of 1 ms; the blocks (E = 10¹⁴ Pa)
+    10⁵ times stiffer axially than the springs."""
+    m = Model(gravity=(0.0, 0.0, -G))
+    m.add_material("rock", Material(CORNER_PAIR_MASS, 1e14, 0.25))
+    m.add_polyhedron(*box((0, 0, -1), (1, 1, 0)), "rock", fixed=True, name="base")
+    m.add_polyhedron(*box((0, 0, 0), (1, 1, 1)), "rock", name="cube")
+    result = run(m, RunSettings(dt=1e-3, n_steps=steps, method=method, penalty=1e14,
+                                contact_penalty=CORNER_PAIR_PENALTY, velocity_ratio=0.0))
+    state = result.final_state
+    assert state is not None and state.contacts is not None
+    return 0.5 - float(result.array("centroid")[-1, 1, 2]), int(np.sum(state.contacts.closed))
