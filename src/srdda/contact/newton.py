@@ -32,9 +32,11 @@ Newton's method with a line search on Π reaches it:
   is not taken (the iterate stays, the next model is its own states): so Π
   falls at every step taken and the iterates cannot cycle. A damped step stops short
   of where a spring takes hold: the next model has the springs that act at
-  the full step already;
+  the full step already, and sticks the shear springs whose shear passes
+  through their elastic range on the way (a slip that turns back);
 * N* of the yield forces stays fixed while the active set settles (each
-  such problem is convex), then follows the solved normal forces once
+  such problem is convex), then, once at most 1 % of the contacts still
+  change state (``NEARLY_SETTLED``), follows the solved normal forces once
   (``NORMAL_UPDATES``: each update restarts the active set's settling; more
   updates cost more solves than they change, docs/dev/contact-solve.md);
   a contact new in the step sticks until a solve gave it a normal force
@@ -74,6 +76,7 @@ ARMIJO = 1e-4  # a step must decrease Π by this fraction of what its slope at t
 MIN_STEP = 1e-6  # the backtracking stops at this step length
 FORCE_FLOOR = 1e-9  # the iteration's force tolerance (× the blocks' force scale) when the run's is below: rounding
 NORMAL_UPDATES = 1  # the Tresca fixed point's updates of N* after the first problem settled; then N* is held
+NEARLY_SETTLED = 0.01  # N* is updated once no more than this fraction of the contacts still changes state
 KINK_PASS = 1e-6  # a damped step goes this fraction past the first kink of Π along the Newton direction
 ROUNDING = 64 * np.finfo(float).eps  # relative rounding of Π's sums over contacts: decreases below it are noise
 
@@ -251,12 +254,28 @@ class NewtonContactStep(ContactStep):
             alpha = 0.0
         if 0.0 < alpha < 1.0:
             # a damped step stops short of where a spring takes hold: the next model has the springs that act
-            # at the full step already (a contact closed, a shear spring sticking), or it would stop short again
+            # at the full step already (a contact closed, a shear spring sticking at the full step or on the way
+            # to it), or it would stop short again
             gap1, shear1 = along(1.0)
             self._stiffer = (self.response.normal_stiffness * gap1 < self.response.tension,
-                             self.response.shear_stiffness * magnitudes(shear1) <= self.yield_force())
+                             self._sticks_on_the_way(shear0, shear1))
         self.step_lengths.append(alpha)
         return alpha
+
+    def _sticks_on_the_way(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+        """(n,) bool: the shear springs whose shear on the segment from ``start`` to ``end`` (n, k) comes within
+        their elastic range |s| ≤ τ/k_s somewhere, the end included.
+
+        A slipping spring's model is its constant yield force τ·ŝ: where the full step carries the shear back
+        through the elastic range (the slip turns back in 2D, turns by much in 3D), that force pushed on past
+        the point where the spring holds, and a model slipping the other way would overshoot back. Modelled
+        sticking, the next solve stops it there (the damped steps of α ≈ 0.1 this ended: docs/dev/contact-solve.md,
+        *Slip that turns back within a solve*)."""
+        path = end - start
+        length2 = np.einsum("nk,nk->n", path, path)
+        along = np.clip(-np.einsum("nk,nk->n", start, path) / np.where(length2 > 0.0, length2, 1.0), 0.0, 1.0)
+        nearest = magnitudes(start + along[:, None] * path)
+        return self.response.shear_stiffness * nearest <= self.yield_force()
 
     def _first_kink(self, gap: np.ndarray, shear: np.ndarray, dgap: np.ndarray, dshear: np.ndarray) -> float:
         """The smallest α in (0, 1] at which a spring's true state changes along gap + α·dgap, shear + α·dshear
@@ -324,8 +343,12 @@ class NewtonContactStep(ContactStep):
         self.unsettled_pairs = np.column_stack([r.block_a[changed], r.block_b[changed]])
         self.normal_on, self.stick, self.slip = normal_on, stick, slip
         self.slip_direction = np.where(slip[:, None], _units(shear), 0.0)
-        if self.follow_normal_force and not done and (settled_states or not np.all(self.known)):
-            self.normal_updates += bool(settled_states)
+        # N* follows once the active set has nearly settled: the last few contacts' changes hardly move the
+        # normal forces, and waiting for them would restart the settling after them
+        nearly_settled = full_step and int(np.sum(changed_normal | changed_shear)) <= NEARLY_SETTLED * len(gap)
+        update = settled_states or (nearly_settled and self.normal_updates < NORMAL_UPDATES)
+        if self.follow_normal_force and not done and (update or not np.all(self.known)):
+            self.normal_updates += bool(update)
             self.normal_star = compression
         self.known[:] = True
         self.normal_force = -np.minimum(kn * gap, self.response.tension)

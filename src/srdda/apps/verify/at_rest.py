@@ -27,7 +27,7 @@ __all__ = ["rest_travel"]
 
 # The bounds: the block on the 30° incline with φ = 35° moves less than 1e-6 m from the start of the dynamic stage, a wedge at FS 1.2 or 1.05 less than 1e-5 m
 # (measured under Newton: 4e-11 m, 6e-12 m, 1e-10 m and 6e-11 m), the 30 x 30 brick wall's largest speed after
-# 0.1 s is below 1e-4 m/s (measured 2.5e-7 m/s).
+# 0.1 s is below 1e-4 m/s (measured 4.0e-7 m/s).
 INCLINE_AT_REST, WEDGE_AT_REST, WALL_AT_REST = 1e-6, 1e-5, 1e-4
 INCLINE_STEPS, WEDGE_STEPS, WALL_TIME = 1000, 600, 0.1  # the dynamic stage: 1 s, 0.6 s, 0.1 s of 1 ms steps
 WEDGE_FACTORS = (1.2, 1.05)
