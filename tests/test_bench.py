@@ -15,12 +15,14 @@ from click.testing import CliRunner
 
 from srdda.apps.bench.models import (BRICK, SLOPE_3D, SLOPES, Slope3DSpec, brick_wall, english_bond_outlines,
                                 english_bond_wall, jointed_slope, jointed_slope_3d, slope_3d_cut, slope_input)
-from srdda.apps.bench.runner import CASES, QUICK, REQUIRED_KEYS, BenchCase, format_table, measure
+from srdda.apps.bench.runner import CASES, QUICK, REQUIRED_KEYS, BenchCase, beyond_free_fall, format_table, measure
+from srdda import Material
 from srdda.apps.cli import main
 from srdda.contact.pipeline import ContactModel, ContactStep
 from srdda.geometry.jointsets3d import plane_normal
 from srdda.model import Model
 from srdda.settings import RunSettings
+from srdda.simulation import run
 from srdda.step import Stepper, contact_parameters, model_half_height
 from srdda.term import CUT_CAUSES
 
@@ -106,6 +108,9 @@ def test_bench_quick_json_rows() -> None:
         assert min(shares) >= 0.0 and sum(shares) == pytest.approx(1.0, abs=1e-9)  # rounding of the sum
         assert r["peak_mb"] > 0
         assert (r["cg_iterations"], r["cg_iterations_per_solve"]) == (0, None)  # below 500 blocks: direct solves
+        # two steps from rest: some blocks fall freely (ratio 1); open-close's contacts pull a few of them up to
+        # 0.5 % further (12 of slope_a's blocks beyond the 0.1 % margin), a blow-up would take them many times
+        assert isinstance(r["beyond_free_fall"], int) and 0.99 <= r["free_fall_ratio"] < 1.01
 
 
 def test_bench_counts_the_conjugate_gradients_iterations() -> None:
@@ -260,3 +265,21 @@ def test_tiny_3d_wall_runs_through_the_runner() -> None:
     assert min(shares) >= 0.0 and sum(shares) == pytest.approx(1.0, abs=1e-9)  # rounding of the sum
     # the engine is as it was: the probe restored what it wrapped
     assert (Stepper.step, ContactModel.prepare, ContactStep.converged) == engine
+
+
+def test_beyond_free_fall_counts_the_blocks_pushed_further_than_gravity_could() -> None:
+    # three free blocks without contacts, 0.1 s: one falls from rest (its bound, to rounding), one is
+    # thrown sideways at 1 m/s (its path is shorter than |v₀|·t + ½g·t²), one is pushed by a 10 kN load as well
+    m = Model(gravity=(0.0, -9.81))
+    m.add_material("rock", Material(2600.0, 1e10, 0.25))
+    m.add_block([[0, 0], [1, 0], [1, 1], [0, 1]], "rock")
+    m.add_block([[3, 0], [4, 0], [4, 1], [3, 1]], "rock", velocity=(1.0, 0.0))
+    m.add_block([[6, 0], [7, 0], [7, 1], [6, 1]], "rock")
+    m.add_point_load((6.5, 0.5), (1e4, 0.0))
+    arrays = m.arrays()
+    result = run(arrays, RunSettings(dt=1e-3, n_steps=100, contacts=False))
+    beyond, ratio = beyond_free_fall(arrays, result)
+    assert beyond == 1
+    t, g = 0.1, 9.81
+    pushed = np.hypot(0.5 * 1e4 / 2600.0 * t**2, 0.5 * g * t**2)  # the load's ½(F/m)t² beside the fall
+    assert ratio == pytest.approx(pushed / (0.5 * g * t**2), rel=1e-9)

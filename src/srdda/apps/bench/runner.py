@@ -29,6 +29,11 @@ nothing is patched in the parent):
 * ``device``: where the conjugate gradient ran: "cpu", or the GPU's name (``--device gpu``,
   :mod:`srdda.backends`); ``gpu_peak_mb``: the high-water mark of CuPy's memory pool (the GPU memory
   the run's arrays took; None on the CPU); ``gpu_upload_mb``: what the solves moved to the GPU;
+* ``beyond_free_fall``: blocks whose centroid ended more than 0.1 % further from its start than a free
+  body could have moved, |v₀|·t + ½|g|·t² (:func:`beyond_free_fall`; None when the wall-time limit
+  stopped the run), and ``free_fall_ratio``, the largest distance moved over that bound. The standard models are
+  loaded by gravity alone, so a block beyond it was pushed by contacts that put energy in (issue 29: on
+  slope c at a fixed Δt the C code of Shi's DDA moves 479 of 1,014 blocks further than free fall);
 * ``share_*``: the part of the run's wall time spent (exclusively, nested timed
   calls subtracted) in contact detection (``ContactModel.prepare``),
   assembly (``Stepper.assemble`` and ``base_system``: every term's
@@ -58,6 +63,8 @@ from ...backends.arrays import DeviceName
 from ...contact.pipeline import ContactModel, ContactStep
 from ...integrators.methods import MethodName
 from ...model import Model
+from ...modeldata.arrays import ModelArrays
+from ...results import Result
 from ...settings import RunSettings, ContactSolverName
 from ...step import Stepper
 from ...solvers import DEFAULT_TOLERANCE
@@ -249,6 +256,28 @@ def _warm_up(dim: int, device: DeviceName) -> None:
                                   solver="cg-jacobi" if device == "gpu" else settings.solver))
 
 
+# relative: a block falling freely reaches its bound to rounding; contact springs that pull in the first steps
+# (open-close's band, docs/contacts/open-close.md) take a free-falling block up to 0.5 % further (slope_a, 2
+# steps); a contact that blows a model up takes blocks many times further (the C code's slope c: 11.75 m up)
+FREE_FALL_TOLERANCE = 1e-3
+
+
+def beyond_free_fall(arrays: ModelArrays, result: Result) -> tuple[int, float]:
+    """(blocks, ratio): how many blocks' centroids ended further from where they started than a free body
+    could have moved in the run, |v₀|·t + ½|g|·t² (v₀ the block's initial velocity), by more than
+    ``FREE_FALL_TOLERANCE`` of it, and the largest ratio
+    of such a distance to that bound over the moving blocks (0 when none could move). For models loaded by
+    gravity alone, as the standard ones are: any other load may move a block further."""
+    t = float(result.time[-1])
+    centroid = result.array("centroid")
+    moved = np.linalg.norm(centroid[-1] - centroid[0], axis=1)
+    v0 = np.linalg.norm(arrays.block_velocity[:, arrays.block_type.translation], axis=1)
+    bound = v0 * t + 0.5 * float(np.linalg.norm(arrays.gravity)) * t * t
+    free = ~arrays.block_fixed & (bound > 0.0)
+    ratio = float(np.max(moved[free] / bound[free])) if np.any(free) else 0.0
+    return int(np.sum(moved[free] > bound[free] * (1.0 + FREE_FALL_TOLERANCE))), ratio
+
+
 def measure(case: BenchCase, steps: int, method: MethodName, dt: float | None, timeout: float,
             contact_solver: ContactSolverName | None = None, device: DeviceName = "cpu") -> dict[str, Any]:
     """Build and run one model in this process, its solves on ``device``; the row of ``srdda bench --json``
@@ -267,8 +296,11 @@ def measure(case: BenchCase, steps: int, method: MethodName, dt: float | None, t
     with probe.installed():
         t0, cpu0 = time.perf_counter(), time.process_time()
         try:
-            status = simulation.run(arrays, settings, keep_vertices=False).status  # the histories as before
+            result = simulation.run(arrays, settings, keep_vertices=False)  # the histories as before
+            status = result.status
+            beyond, ratio = beyond_free_fall(arrays, result)
         except WallTimeLimit:
+            beyond, ratio = None, None
             status = "time limit"
             note = (f"wall-time limit {timeout:g} s reached after {len(probe.accepted_solves)} accepted steps "
                     f"and {probe.attempts} attempts")
@@ -290,6 +322,7 @@ def measure(case: BenchCase, steps: int, method: MethodName, dt: float | None, t
         "cg_iterations": int(sum(iterations)),
         "cg_iterations_per_solve": float(np.mean(iterations)) if iterations else None,
         "wall_s": wall, "cpu_s": cpu, "steps_per_cpu_s": n / cpu if cpu > 0 else 0.0, "build_s": build_s,
+        "beyond_free_fall": beyond, "free_fall_ratio": ratio,
         "status": status, "note": note, **device_columns(probe.solvers),
     }
     for phase in PHASES:
