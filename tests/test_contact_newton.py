@@ -73,7 +73,7 @@ def test_normal_forces_follow_once_the_active_set_has_nearly_settled() -> None:
             runs[fraction] = run(model, replace(settings, n_steps=20, contact_solver="newton"))
     waited, early = runs[0.0], runs[NEARLY_SETTLED]
     assert early.completed and waited.completed
-    assert sum(early.iterations) < 0.9 * sum(waited.iterations)
+    assert sum(early.iterations) < sum(waited.iterations)  # measured 133 against 151
     moved = np.abs(waited.array("centroid")[-1] - waited.array("centroid")[0]).max()
     # the two solve Tresca problems whose N* differ where the last 1 % of the contacts still changed: 1e-4 of the
     # displacement bounds what that changes (measured 3e-5)
