@@ -327,7 +327,8 @@ class NewtonContactStep(ContactStep):
         changed_normal = np.abs(true_n - model_n) > self._force_limit
         changed_shear = magnitudes(true_s - model_s) > self._force_limit
         full_step = not self.step_lengths or self.step_lengths[-1] == 1.0
-        settled_states = full_step and not np.any(changed_normal | changed_shear)
+        flipping = changed_normal | changed_shear
+        settled_states = full_step and not np.any(flipping)
         # Tresca: the yield forces' N* stay fixed while the active set settles (each such problem is convex, the
         # line search on its Π converges), then follow the solved normal forces until these settle too
         acts = (self.response.friction > 0.0) & normal_on
@@ -339,13 +340,13 @@ class NewtonContactStep(ContactStep):
         # a contact new in the step stuck at an unbounded yield force in this solve (frictionless ones too):
         # the step is done only after a solve with every yield force from a normal force
         done = settled_states and not np.any(unsettled_friction) and bool(np.all(self.known))
-        changed = changed_normal | changed_shear | (unsettled_friction if settled_states else False)
+        changed = flipping | (unsettled_friction if settled_states else False)
         self.unsettled_pairs = np.column_stack([r.block_a[changed], r.block_b[changed]])
         self.normal_on, self.stick, self.slip = normal_on, stick, slip
         self.slip_direction = np.where(slip[:, None], _units(shear), 0.0)
         # N* follows once the active set has nearly settled: the last few contacts' changes hardly move the
         # normal forces, and waiting for them would restart the settling after them
-        nearly_settled = full_step and int(np.sum(changed_normal | changed_shear)) <= NEARLY_SETTLED * len(gap)
+        nearly_settled = full_step and int(np.sum(flipping)) <= NEARLY_SETTLED * len(gap)
         update = settled_states or (nearly_settled and self.normal_updates < NORMAL_UPDATES)
         if self.follow_normal_force and not done and (update or not np.all(self.known)):
             self.normal_updates += bool(update)

@@ -162,8 +162,8 @@ def overlapping_pairs(vertices: np.ndarray, block_ptr: np.ndarray, tolerance: fl
     Blocks that only touch (a shared edge, a vertex on an edge) overlap by zero
     up to rounding. Candidate pairs come from shapely's STRtree (intersecting
     envelopes); the overlap areas, one vectorised intersection, only of the pairs
-    whose interiors meet (the DE-9IM pattern ``T********``: half the time of
-    intersecting every touching pair on a 10,000-brick wall).
+    whose interiors meet (the DE-9IM pattern ``T********``; a 10,000-brick wall's
+    compile took 0.60 s intersecting every touching pair, 0.21-0.25 s so).
     """
     counts = np.diff(block_ptr)
     owner = np.repeat(np.arange(len(counts)), counts)

@@ -265,9 +265,9 @@ FREE_FALL_TOLERANCE = 1e-3
 def beyond_free_fall(arrays: ModelArrays, result: Result) -> tuple[int, float]:
     """(blocks, ratio): how many blocks' centroids ended further from where they started than a free body
     could have moved in the run, |v₀|·t + ½|g|·t² (v₀ the block's initial velocity), by more than
-    ``FREE_FALL_TOLERANCE`` of it, and the largest ratio
-    of such a distance to that bound over the moving blocks (0 when none could move). For models loaded by
-    gravity alone, as the standard ones are: any other load may move a block further."""
+    ``FREE_FALL_TOLERANCE`` of it; and the largest distance moved over that bound among the blocks that can
+    move (0 when none can). For models loaded by gravity alone, as the standard ones are: any other load may
+    move a block further."""
     t = float(result.time[-1])
     centroid = result.array("centroid")
     moved = np.linalg.norm(centroid[-1] - centroid[0], axis=1)
