@@ -163,3 +163,41 @@ def test_a_dropped_polyhedron_puts_no_energy_in(solver, block, height, v, omega,
     # falls at least g t²/2 (v_z ≤ 0), and some vertex is below it, so a vertex reaches the base by √(2(h + D)/g)
     landed = np.sqrt(2.0 * (height + np.ptp(points[:, 2])) / -G)
     _check(m, run, solver, int(np.ceil(landed / 1e-3)) + 20)
+
+
+# Shi's step only: the impact law's dashpot is calibrated to it (docs/contacts/impacts.md)
+SHI_RUNS = [run for run in RUNS if run[1] is None]
+
+
+@few
+@given(block=convex_block(), height=st.floats(0.0, 0.2), vx=st.floats(-2, 2), omega=st.floats(-3, 3),
+       turn=st.floats(0, 2 * np.pi), joint=joints, restitution=st.floats(0.2, 1.0), run=st.sampled_from(SHI_RUNS))
+def test_a_polygon_dropped_on_a_joint_with_a_restitution_puts_no_energy_in(block, height, vx, omega, turn, joint,
+                                                                           restitution, run):
+    # the impact law as a term of Newton's potential (its force the derivative of a convex ψ of the end gap)
+    c, s = np.cos(turn), np.sin(turn)
+    shape = 0.3 * block @ np.array([[c, s], [-s, c]])
+    shape = shape - [0.0, shape[:, 1].min() - height]
+    m = _model(2, {**joint, "restitution": restitution})
+    m.add_block([[-5, -1], [5, -1], [5, 0], [-5, 0]], "rock", fixed=True)
+    m.add_block(shape, "rock", velocity=(vx, 0.0), angular_velocity=omega)
+    _check(m, run, "newton", 300)
+
+
+@settings(max_examples=3, deadline=None, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(block=convex_polyhedron(), height=st.floats(0.0, 0.05),
+       v=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, -0.3)),
+       omega=st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3)),
+       turn=st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3)), joint=joints,
+       restitution=st.floats(0.2, 1.0), run=st.sampled_from(SHI_RUNS))
+def test_a_polyhedron_dropped_on_a_joint_with_a_restitution_puts_no_energy_in(block, height, v, omega, turn, joint,
+                                                                              restitution, run):
+    points, faces = block
+    points = points @ rotation_matrix_3d(np.array([turn]))[0].T
+    points = points - [0.0, 0.0, points[:, 2].min() - height]
+    m = _model(3, {**joint, "restitution": restitution})
+    m.add_polyhedron(*box((-2, -2, -1), (2, 2, 0)), "rock", fixed=True)
+    m.add_polyhedron(points, faces, "rock", velocity=v, angular_velocity=omega)
+    landed = np.sqrt(2.0 * (height + np.ptp(points[:, 2])) / -G)  # as in the drop above
+    _check(m, run, "newton", int(np.ceil(landed / 1e-3)) + 20)

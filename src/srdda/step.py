@@ -114,12 +114,11 @@ def default_terms(arrays: ModelArrays, settings: RunSettings, contact_law: Conta
     if settings.contacts and arrays.n_blocks > 1:
         w0 = model_half_height(arrays.vertex_position)
         newton = settings.contact_solver == "newton"
-        if not np.all(np.isnan(arrays.joints.restitution)) and (newton or not method.scheme.is_shi):
-            # the impact law is linearised inside the open-close iteration, and calibrated to Shi's step
-            raise ModelError("joint restitution needs contact_solver = 'open-close' and Shi's time step (scheme "
-                             f"'shi', or 'paper' at rho_inf = 1); this run has contact_solver = "
-                             f"{settings.contact_solver!r}, scheme {method.scheme.name!r}, rho_inf = "
-                             f"{method.scheme.rho_inf:g} (docs/contacts.md, \"Impacts and restitution\")")
+        if not np.all(np.isnan(arrays.joints.restitution)) and not method.scheme.is_shi:
+            # the impact law's dashpot is calibrated to Shi's step
+            raise ModelError("joint restitution needs Shi's time step (scheme 'shi', or 'paper' at rho_inf = 1); "
+                             f"this run has scheme {method.scheme.name!r}, rho_inf = {method.scheme.rho_inf:g} "
+                             "(docs/contacts.md, \"Impacts and restitution\")")
         model = (NewtonContactModel if newton else ContactModel)(arrays, contact_parameters(arrays, settings, w0),
                                                                  contact_law)
         if np.any(model.can_touch):

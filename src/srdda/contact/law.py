@@ -31,7 +31,8 @@ from ..modeldata.materials import JointTable
 from .openclose import LOCKED
 from .record import ContactRecord
 
-__all__ = ["ContactStiffness", "JointResponse", "ContactLaw", "MohrCoulomb", "impact_damping_ratio", "impact_force"]
+__all__ = ["ContactStiffness", "JointResponse", "ContactLaw", "MohrCoulomb", "impact_damping_ratio", "impact_force",
+           "impact_potential"]
 
 
 @dataclass(frozen=True)
@@ -134,6 +135,32 @@ def impact_damping_ratio(restitution: np.ndarray, omega_dt: np.ndarray) -> np.nd
         more = decay > restitution
         lo, hi = np.where(more, zeta, lo), np.where(more, hi, zeta)
     return np.where(restitution < 1.0, 0.5 * (lo + hi), 0.0)
+
+
+def impact_potential(gap0: np.ndarray, gap1: np.ndarray, stiffness: np.ndarray, viscosity: np.ndarray
+                     ) -> np.ndarray:
+    """ψ (n,) with ∂ψ/∂g1 = −N of :func:`impact_force`, ψ = 0 at g1 = 0 (J, per m in 2D): the impact law as
+    a convex potential of the end gap, for a solve that minimises the step's potential (the Newton solver).
+
+    N's spring part is the discrete gradient −(E(g1) − E(g0))/(g1 − g0) of the
+    convex E = ½k·p², which increases with g1 (secants of a convex function),
+    so its integral is convex: ¼k·g1² + ½k·g0·g1 while closed at both ends,
+    −½k·g0²·ln((g1 − g0)/(−g0)) opening (g0 < 0 ≤ g1), and with u = g1 − g0,
+    ½k(½(u² − g0²) + 2g0(u + g0) + g0²·ln(|u|/g0)) closing (g1 < 0 ≤ g0). The
+    dashpot's part is (c/Δt)(½p1² − p0·g1).
+    """
+    p0, p1 = np.minimum(gap0, 0.0), np.minimum(gap1, 0.0)
+    closed0, closed1 = gap0 < 0.0, gap1 < 0.0
+    half = 0.5 * stiffness
+    both = half * (0.5 * gap1**2 + gap0 * gap1)
+    u = gap1 - gap0
+    opening_arg = np.where(closed0 & ~closed1, u / np.where(closed0, -gap0, 1.0), 1.0)
+    opening = -half * gap0**2 * np.log(np.maximum(opening_arg, 1.0))
+    g0 = np.where(closed1 & ~closed0 & (gap0 > 0.0), gap0, 1.0)
+    closing_log = np.where(gap0 > 0.0, gap0**2 * np.log(np.where(closed1 & ~closed0, -u, 1.0) / g0), 0.0)
+    closing = half * (0.5 * (u**2 - gap0**2) + 2.0 * gap0 * (u + gap0) + closing_log)
+    spring = np.where(closed0 & closed1, both, np.where(closed0, opening, np.where(closed1, closing, 0.0)))
+    return spring + viscosity * (0.5 * p1**2 - p0 * gap1)
 
 
 def impact_force(gap0: np.ndarray, gap1: np.ndarray, stiffness: np.ndarray, viscosity: np.ndarray

@@ -61,7 +61,7 @@ import numpy as np
 
 from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
 from ..term import StepContext
-from .law import ContactLaw, JointResponse
+from .law import ContactLaw, JointResponse, impact_force, impact_potential
 from .openclose import LOCKED, OPEN, SLIDING, magnitudes, negligible_force
 from .pipeline import ContactKind, ContactModel, ContactParameters, ContactSet, ContactStep, ContactTerm
 from .record import ContactRecord
@@ -126,17 +126,29 @@ class NewtonContactStep(ContactStep):
         tau = self.yield_force()
         tension = self.response.tension
         if model:
-            normal = np.where(self.normal_on, kn * gap, tension)
+            normal = self._impact_normal(np.where(self.normal_on, kn * gap, tension), gap, model)
             sliding = self.slip[:, None]
             tangent = self._tangent_stiffness(tau)[:, None] * self._across(shear)
             shear_force = np.where(self.stick[:, None], ks[:, None] * shear,
                                    np.where(sliding, tau[:, None] * self.slip_direction + tangent, 0.0))
             return normal, shear_force
-        normal = np.minimum(kn * gap, tension)
+        normal = self._impact_normal(np.minimum(kn * gap, tension), gap, model)
         trial = ks[:, None] * shear
         size = magnitudes(trial)
         within = size <= tau
         return normal, np.where(within[:, None], trial, tau[:, None] * _units(shear))
+
+    def _impact_normal(self, normal: np.ndarray, gap: np.ndarray, model: bool) -> np.ndarray:
+        """``normal`` (γ_n, n) with the contacts of a restitution given their impact law's force (−N) at effective
+        gaps ``gap``: the law's, or (``model``) the last solve's linearisation of it (:mod:`.impact`)."""
+        impacts = self.impacts
+        if impacts is None:
+            return normal
+        end = gap[impacts.index]
+        out = normal.copy()
+        out[impacts.index] = -(impacts.applied(end) if model else
+                               impact_force(impacts.gap0, end, impacts.stiffness, impacts.dashpot)[0])
+        return out
 
     def _tangent_stiffness(self, tau: np.ndarray) -> np.ndarray:
         """τ/|s| of the slipping contacts' consistent tangent across ŝ (3D; zero for k = 1: no direction
@@ -158,8 +170,11 @@ class NewtonContactStep(ContactStep):
         springs = self._springs_at(ctx)
         c_p = ctx.coeffs.c_p
         self._c_p = c_p
-        springs.add_to(system, self.normal_on, self.stick, c_p, by_changes=ctx.theta is None)
+        springs.add_to(system, self._shi_normal(self.normal_on), self.stick, c_p, by_changes=ctx.theta is None)
         self.add_water(system, springs)
+        if self.impacts is not None:  # the impact law linearised at the last iterate's gaps
+            i = self.impacts.index
+            self.impacts.add_to(system, springs.normal_a[i], springs.normal_b[i], ctx)
         capped = np.flatnonzero(~self.normal_on & (self.response.tension > 0.0))
         if len(capped):  # bonded contacts pulled to their tensile strength: the constant force T along n
             pull = self.response.tension[capped]
@@ -196,13 +211,28 @@ class NewtonContactStep(ContactStep):
                 + 0.5 * self._tangent_stiffness(tau) * np.einsum("nk,nk->n", across, across)
             shear_energy = np.where(self.stick, 0.5 * ks * np.einsum("nk,nk->n", shear, shear),
                                     np.where(self.slip, slip, 0.0))
-            return float(np.sum(normal) + np.sum(shear_energy))
+            return float(np.sum(self._impact_potentials(normal, gap, model)) + np.sum(shear_energy))
         capped = kn * gap > tension
-        normal = np.where(capped, tension * gap - 0.5 * tension**2 / kn, 0.5 * kn * gap**2)
+        normal = self._impact_potentials(np.where(capped, tension * gap - 0.5 * tension**2 / kn, 0.5 * kn * gap**2),
+                                         gap, model)
         size = magnitudes(shear)
         limit = tau / ks
         shear_energy = np.where(size <= limit, 0.5 * ks * size**2, tau * size - 0.5 * tau * limit)
         return float(np.sum(normal) + np.sum(shear_energy))
+
+    def _impact_potentials(self, normal: np.ndarray, gap: np.ndarray, model: bool) -> np.ndarray:
+        """``normal`` (n,) with the contacts of a restitution given their impact law's potential at gaps ``gap``
+        (:func:`~srdda.contact.law.impact_potential`), or that of its linearisation −N·g + ½s(g − g_lin)²."""
+        impacts = self.impacts
+        if impacts is None:
+            return normal
+        end = gap[impacts.index]
+        out = normal.copy()
+        if model:
+            out[impacts.index] = -impacts.force * end + 0.5 * impacts.slope * (end - impacts.solved_at) ** 2
+        else:
+            out[impacts.index] = impact_potential(impacts.gap0, end, impacts.stiffness, impacts.dashpot)
+        return out
 
     def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
         """α in (0, 1] along Δd_k + α·δ that decreases Π enough (Armijo, backtracking); ``curvature()`` gives
@@ -307,7 +337,10 @@ class NewtonContactStep(ContactStep):
         c_p = ctx.coeffs.c_p
         gap, shear = self._at_alpha_point(c_p)
         kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
-        compression = np.maximum(-kn * gap, 0.0)
+        # where the true springs' forces differ from the model's by more than the negligible force, another solve
+        true_n, true_s = self._forces(gap, shear, model=False)
+        model_n, model_s = self._forces(gap, shear, model=True)
+        compression = np.maximum(-true_n, 0.0)
         self._force_limit = negligible_force(ctx.arrays.block_mass, ctx.arrays.gravity, r.block_a, r.block_b,
                                              compression, max(p.force_tolerance, FORCE_FLOOR))
         # a bonded contact carries tension up to its tensile strength (beyond, that force), a sliding one the
@@ -321,9 +354,6 @@ class NewtonContactStep(ContactStep):
             normal_on, stick = normal_on | self._stiffer[0], stick | self._stiffer[1]
             self._stiffer = None
         slip = ~stick
-        # where the true springs' forces differ from the model's by more than the negligible force, another solve
-        true_n, true_s = self._forces(gap, shear, model=False)
-        model_n, model_s = self._forces(gap, shear, model=True)
         changed_normal = np.abs(true_n - model_n) > self._force_limit
         changed_shear = magnitudes(true_s - model_s) > self._force_limit
         full_step = not self.step_lengths or self.step_lengths[-1] == 1.0
@@ -352,7 +382,9 @@ class NewtonContactStep(ContactStep):
             self.normal_updates += bool(update)
             self.normal_star = compression
         self.known[:] = True
-        self.normal_force = -np.minimum(kn * gap, self.response.tension)
+        self.normal_force = -true_n
+        if self.impacts is not None:  # the next solve linearises the impact law at this iterate
+            self.impacts.at = gap[self.impacts.index].copy()
         self.state = np.where(normal_on, np.where(stick, LOCKED, SLIDING), OPEN).astype(np.int8)
         self.iterations += 1
         return done
@@ -391,24 +423,42 @@ class NewtonContactStep(ContactStep):
         return np.zeros(len(self.state), dtype=bool)
 
     def stored_energy(self) -> float:
-        """J (per m in 2D) the closed contacts' springs keep at the end of the step (t + Δt, not the α-point):
-        ½k_n g² at the end gap (½T²/k_n where a bonded one ends pulled beyond its tensile strength T), and
-        ½k_s|s_e|² of the elastic stretch the shear spring carries into the next step (:meth:`_carried_shear`).
-        With c_p = 1 both are the α-point's."""
+        """J (per m in 2D) the contacts' springs keep at the end of the step (t + Δt, not the α-point): ½k_n g²
+        of the closed ones at the end gap (½T²/k_n where a bonded one ends pulled beyond its tensile strength
+        T), and ½k_s|s_e|² of the elastic stretch every shear spring carries into the next step
+        (:meth:`_carried_shear`), open or closed: a contact that ends open under a yield force of an earlier
+        iterate's N* (or an impact law's N while its gap opens) keeps its stretch, and gives it back when it
+        closes again. With c_p = 1 both are the α-point's."""
         carried, _ = self._carried_shear()
         closed = self.state != OPEN
         kn, ks, tension = self.response.normal_stiffness, self.response.shear_stiffness, self.response.tension
         normal = np.where(kn * self.gap < tension, 0.5 * kn * self.gap**2, 0.5 * tension**2 / kn)
-        return float(np.sum(normal[closed])) + 0.5 * float(np.sum((ks[:, None] * carried**2)[closed]))
+        return float(np.sum(normal[self._shi_normal(closed)])) \
+            + 0.5 * float(np.sum(ks[:, None] * carried**2)) + self._impact_energy(self.gap)
 
     def start_energy(self) -> float:
-        """J (per m in 2D) the springs of the contacts closed at t hold at the step's detected gaps and the
-        stretches they carried in (as :meth:`stored_energy` at the end)."""
+        """J (per m in 2D) the normal springs of the contacts closed at t hold at the step's detected gaps, and
+        every shear spring at the stretch it carried in (as :meth:`stored_energy` at the end)."""
         closed = ~self.open_at_start
         kn, ks, tension = self.response.normal_stiffness, self.response.shear_stiffness, self.response.tension
         gap = self.record.gap
         normal = np.where(kn * gap < tension, 0.5 * kn * gap**2, 0.5 * tension**2 / kn)
-        return float(np.sum(normal[closed])) + 0.5 * float(np.sum((ks[:, None] * self.shear0**2)[closed]))
+        return float(np.sum(normal[self._shi_normal(closed)])) \
+            + 0.5 * float(np.sum(ks[:, None] * self.shear0**2)) + self._impact_energy(gap)
+
+    def _impact_energy(self, gap: np.ndarray) -> float:
+        """½k_n·p² (J, per m in 2D) of the impact springs (contacts of a restitution) at gaps ``gap``."""
+        return 0.0 if self.impacts is None else self.impacts.energy(gap[self.impacts.index])
+
+    def impact_loss(self) -> float:
+        """What the impact springs took out over the step: the negative work of the law's force (the force of
+        :meth:`work`, not the last linearisation's) less the change of ½k_n·p²."""
+        if self.impacts is None:
+            return 0.0
+        impacts = self.impacts
+        end = self.gap[impacts.index]
+        force, _ = impact_force(impacts.gap0, end, impacts.stiffness, impacts.dashpot)
+        return -float(np.dot(force, end - impacts.gap0)) - (impacts.energy(end) - impacts.energy(impacts.gap0))
 
     def work(self, dd: np.ndarray, c_p: float) -> tuple[float, float]:
         """(friction, springs): minus the plastic dissipation τ·|slip| of the step, and the work of every
