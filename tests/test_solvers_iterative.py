@@ -16,7 +16,7 @@ import pytest
 from srdda.assembly.system import BlockSystem
 from srdda.apps.bench.models import brick_wall
 from srdda.solvers import (ITERATIVE_LIMIT, AutoSolver, ConjugateGradientSolver, SolverError, SuperLUSolver,
-                           get_solver)
+                           get_solver, solves_inexactly)
 from srdda.state import initial_state
 from srdda.step import Stepper
 
@@ -93,6 +93,29 @@ def test_warm_start_takes_fewer_iterations(preconditioner):
     # from the solution of a right-hand side 0.1% away the error starts 1000 times smaller: CG's
     # error falls geometrically, so the warm solve needs clearly fewer iterations (at least a third fewer)
     assert warm.iterations[1] <= 2 * cold.iterations[0] // 3
+
+
+@pytest.mark.parametrize("preconditioner", ["amg", "jacobi"])
+def test_a_looser_tolerance_for_one_solve_stops_earlier_within_it(preconditioner):
+    # an inexact Newton step asks one solve for a looser tolerance (docs/contacts/solve.md): the solve stops
+    # within that tolerance of the direct solve, in fewer iterations than at the backend's own
+    system = _wall_system()
+    rhs = system.full_rhs()
+    exact = SuperLUSolver().solve(system, rhs)
+    tight, loose = ConjugateGradientSolver(preconditioner, 1e-11), ConjugateGradientSolver(preconditioner, 1e-11)
+    tight.solve(system, rhs)
+    x = loose.solve(system, rhs, 1e-7)
+    assert np.abs(x - exact).max() <= 1e-7
+    assert loose.iterations[0] < tight.iterations[0]
+
+
+def test_only_iterative_backends_solve_inexactly():
+    small, large = _chain(20), _chain(ITERATIVE_LIMIT + 1)
+    auto = AutoSolver()
+    assert not auto.inexact(small) and auto.inexact(large)
+    assert ConjugateGradientSolver("jacobi").inexact(small)
+    assert not solves_inexactly(SuperLUSolver(), large) and not solves_inexactly(get_solver("dense"), small)
+    assert not solves_inexactly(_Compared(SuperLUSolver()), large)  # a backend without `inexact` is exact
 
 
 def test_the_same_system_again_needs_no_iteration():

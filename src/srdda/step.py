@@ -32,7 +32,7 @@ from .integrators.secant import SecantPass
 from .modeldata.arrays import ModelArrays
 from .modeldata.materials import ModelError
 from .settings import RunSettings
-from .solvers import LinearSolver, SolverError
+from .solvers import LinearSolver, SolverError, solves_inexactly
 from .state import State
 from .term import StepContext, StepCut, Term
 
@@ -191,8 +191,13 @@ class Stepper:
         before: np.ndarray | None = None  # the last iterate (increments then multipliers) of a line search
         while True:
             system = self.assemble(ctx, terms, base)
+            tolerance = None  # an iterative backend's own, unless a Newton iteration asks for a looser one
+            if searching and solves_inexactly(self.solver, system):
+                tolerance = min(t.solve_tolerance(s.solver_tolerance) for t in searching)
             try:
-                solution = self.solver.solve(system, system.full_rhs())
+                rhs = system.full_rhs()
+                solution = self.solver.solve(system, rhs) if tolerance is None else \
+                    self.solver.solve(system, rhs, tolerance)
             except SolverError as exc:
                 return StepOutcome("diverged", solves, dt, reason=f"{label}: {exc}")
             if searching:  # Newton: from the last iterate (zero increments at first) towards the solution

@@ -110,6 +110,11 @@ class Term:
         minus the last iterate); ``curvature()`` gives δᵀAδ of the solved system."""
         return 1.0
 
+    def solve_tolerance(self, tight: float) -> float:
+        """The displacement tolerance (m) the next solve of a line-searching term needs from an iterative
+        backend: ``tight`` (the run's ``solver_tolerance``) or looser while its iteration is far from settled."""
+        return tight
+
     def converged(self, dd: np.ndarray, ctx: StepContext) -> bool:
         """After a solve with increments ``dd``: has this term's own iteration settled?"""
         return True

@@ -41,6 +41,13 @@ Newton's method with a line search on Π reaches it:
   updates cost more solves than they change, docs/dev/contact-solve.md);
   a contact new in the step sticks until a solve gave it a normal force
   (Shi: a contact that closes locks first);
+* with an iterative backend the solves are inexact while the active set
+  still moves: while more than ``NEARLY_SETTLED`` of the contacts changed
+  state at the last iterate, a solve stops at ``INEXACT_FORCING`` × the last
+  iterate's largest change instead of the run's ``solver_tolerance`` (the
+  next model differs anyway), and the step ends with a solve at that
+  tolerance (Eisenstat and Walker's forcing terms, on the active set's
+  progress instead of the residual's);
 * it has converged when the full step was taken, every contact's yield
   force came from a normal force, no contact changed state by more than the
   negligible force, and, until N* was updated ``NORMAL_UPDATES`` times, no
@@ -77,6 +84,9 @@ MIN_STEP = 1e-6  # the backtracking stops at this step length
 FORCE_FLOOR = 1e-9  # the iteration's force tolerance (× the blocks' force scale) when the run's is below: rounding
 NORMAL_UPDATES = 1  # the Tresca fixed point's updates of N* after the first problem settled; then N* is held
 NEARLY_SETTLED = 0.01  # N* is updated once no more than this fraction of the contacts still changes state
+# while more than NEARLY_SETTLED of the contacts changed state at the last iterate, an iterative backend solves
+# to this fraction of the last iterate's largest change (inexact Newton, docs/contacts/solve.md)
+INEXACT_FORCING = 0.3
 KINK_PASS = 1e-6  # a damped step goes this fraction past the first kink of Π along the Newton direction
 ROUNDING = 64 * np.finfo(float).eps  # relative rounding of Π's sums over contacts: decreases below it are noise
 
@@ -113,6 +123,12 @@ class NewtonContactStep(ContactStep):
         self.follow_normal_force = True  # False: N* stays as given (the Tresca problem alone: tests)
         self.normal_updates = 0  # N* updates of the Tresca fixed point so far (NORMAL_UPDATES at most)
         self._c_p = 1.0  # the scheme's penalty weight (set by add_to)
+        # inexact Newton: the last iterate, its largest change, whether many contacts changed state at it, and
+        # whether the last solve was looser than the run's tolerance (then the step is not done yet)
+        self._last_iterate: np.ndarray | None = None
+        self._change = 0.0
+        self._unsettled = False
+        self._loose = False
 
     # -- the contact model ---------------------------------------------------
     def yield_force(self) -> np.ndarray:
@@ -198,6 +214,14 @@ class NewtonContactStep(ContactStep):
             gap = np.einsum("nk,nk->n", across, self.shear0[sl])[:, None]
             add_penalty_pairs(system, PenaltyPairs(r.block_a[sl], rows_a, r.block_b[sl], rows_b, gap, stiffness),
                               c_p)
+
+    def solve_tolerance(self, tight: float) -> float:
+        """The next solve's displacement tolerance for an iterative backend: ``tight`` once at most
+        ``NEARLY_SETTLED`` of the contacts changed state at the last iterate, else ``INEXACT_FORCING`` × the
+        last iterate's largest change (the active set is still moving, so a tighter solve buys nothing)."""
+        tolerance = max(tight, INEXACT_FORCING * self._change) if self._unsettled else tight
+        self._loose = tolerance > tight
+        return tolerance
 
     def _potentials(self, gap: np.ndarray, shear: np.ndarray, model: bool) -> float:
         """Σ ψ of the springs at effective gaps and shears (up to a constant), of the true functions or of the
@@ -358,6 +382,10 @@ class NewtonContactStep(ContactStep):
         changed_shear = magnitudes(true_s - model_s) > self._force_limit
         full_step = not self.step_lengths or self.step_lengths[-1] == 1.0
         flipping = changed_normal | changed_shear
+        last = np.zeros_like(dd) if self._last_iterate is None else self._last_iterate
+        self._change = float(np.max(np.abs(dd - last), initial=0.0))
+        self._last_iterate = dd.copy()
+        self._unsettled = int(np.sum(flipping)) > NEARLY_SETTLED * len(gap)
         settled_states = full_step and not np.any(flipping)
         # Tresca: the yield forces' N* stay fixed while the active set settles (each such problem is convex, the
         # line search on its Π converges), then follow the solved normal forces until these settle too
@@ -387,7 +415,7 @@ class NewtonContactStep(ContactStep):
             self.impacts.at = gap[self.impacts.index].copy()
         self.state = np.where(normal_on, np.where(stick, LOCKED, SLIDING), OPEN).astype(np.int8)
         self.iterations += 1
-        return done
+        return done and not self._loose  # a loose solve is not the answer: one more at the run's tolerance
 
     # -- after the step ------------------------------------------------------
     def elastic_shear(self, shear: np.ndarray) -> np.ndarray:
@@ -508,3 +536,6 @@ class NewtonContactTerm(ContactTerm):
     def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
         assert self.step is not None
         return self.step.step_length(dd_before, delta, curvature)
+
+    def solve_tolerance(self, tight: float) -> float:
+        return tight if self.step is None else self.step.solve_tolerance(tight)

@@ -1,7 +1,8 @@
 """The linear solvers of a step (``srdda.solvers``): one small interface, several backends.
 
 ``get_solver(name, tolerance)`` returns an object with ``solve(system, rhs) -> x``
-for a :class:`~srdda.assembly.system.BlockSystem`; one instance serves one run and
+(an iterative backend also takes one solve's ``tolerance`` and says where it is
+``inexact``) for a :class:`~srdda.assembly.system.BlockSystem`; one instance serves one run and
 keeps what the next solve can reuse (a factor, an analysis, a preconditioner,
 the last solution). The public API, by group (the modules behind it are private):
 
@@ -14,6 +15,8 @@ Choosing a solver
 - :func:`best_direct`: the fastest installed direct backend.
 - :func:`blas_threads_for_steps`: the context holding BLAS to one thread while a run steps.
 - ``LinearSolver`` (the interface), ``SolverFactory``, ``SolverError``, ``DEFAULT_TOLERANCE``.
+- :func:`solves_inexactly`: whether a backend stops a system at a tolerance (then a Newton iteration may
+  loosen it for one solve).
 
 Direct backends (``_direct``)
 -----------------------------
@@ -59,7 +62,7 @@ need a definite matrix). See docs/constraints.md.
 """
 # The order of these imports is the order of available_solvers(): each module registers its backends.
 from ._registry import (DEFAULT_TOLERANCE, LinearSolver, SolverError, SolverFactory, available_solvers, best_direct,
-                        get_solver, register_solver)
+                        get_solver, register_solver, solves_inexactly)
 from ._direct import CholmodSolver, DenseSolver, PardisoSolver, SuperLUSolver, blas_threads_for_steps
 from ._iterative import (BlockJacobi, ConjugateGradientSolver, IterativeSolverError, PCGResult, SmoothedAggregation,
                          block_jacobi_pcg, block_modes, pcg, smallest_eigenvalue_estimate)
@@ -69,7 +72,7 @@ from ._gpu import ArrayConjugateGradient, BlockPatternCSR, block_diagonal_csr, g
 __all__ = [
     # choosing a solver
     "get_solver", "available_solvers", "register_solver", "best_direct", "blas_threads_for_steps",
-    "LinearSolver", "SolverFactory", "SolverError", "DEFAULT_TOLERANCE",
+    "LinearSolver", "SolverFactory", "SolverError", "DEFAULT_TOLERANCE", "solves_inexactly",
     # direct backends
     "DenseSolver", "SuperLUSolver", "CholmodSolver", "PardisoSolver",
     # iterative backends and their parts

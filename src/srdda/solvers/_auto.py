@@ -7,7 +7,7 @@ import numpy as np
 
 from ._direct import DenseSolver
 from ._iterative import ConjugateGradientSolver
-from ._registry import DEFAULT_TOLERANCE, LinearSolver, SolverError, best_direct, register_solver
+from ._registry import DEFAULT_TOLERANCE, LinearSolver, SolverError, best_direct, register_solver, solves_inexactly
 
 if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
@@ -47,12 +47,16 @@ class AutoSolver:
             return self.direct
         return self.iterative
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+    def inexact(self, system: BlockSystem) -> bool:
+        chosen = self.choose(system)
+        return chosen is self.iterative and solves_inexactly(chosen, system)
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray:
         chosen = self.choose(system)
         if chosen is not self.iterative:
             return chosen.solve(system, rhs)
         try:
-            return chosen.solve(system, rhs)
+            return chosen.solve(system, rhs, tolerance)
         except SolverError:
             self.fallbacks += 1
             return self.direct.solve(system, rhs)

@@ -37,7 +37,14 @@ def _same(a: Matrix, b: Matrix) -> bool:
             and np.array_equal(a.data, b.data))
 
 
-class _Factorizing:
+class _Exact:
+    """A backend that solves every system to rounding (``tolerance`` is ignored)."""
+
+    def inexact(self, system: BlockSystem) -> bool:
+        return False
+
+
+class _Factorizing(_Exact):
     """A backend that factorises the assembled matrix, and keeps the factor while the matrix is unchanged.
 
     Open-close iterations that only change friction forces, and repeated solves
@@ -58,7 +65,7 @@ class _Factorizing:
     def factor(self, matrix: Matrix, constrained: bool) -> Factor:
         raise NotImplementedError
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+    def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray:
         matrix = self.matrix(system)
         if self._last is not None and _same(self._last[0], matrix):
             factor = self._last[1]
@@ -77,12 +84,12 @@ def _saddle_superlu(matrix: sp.csr_matrix) -> Factor:
         raise SolverError(f"singular constrained system (redundant or conflicting constraints?): {exc}") from exc
 
 
-class DenseSolver:
+class DenseSolver(_Exact):
     """LAPACK's symmetric solve of the dense matrix (tiny systems: refactorising costs less than comparing)."""
 
     name = "dense"
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+    def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray:
         matrix = system.saddle_dense() if system.n_constraints else system.to_dense()
         try:
             with warnings.catch_warnings():
@@ -158,7 +165,7 @@ class _BlockPattern:
         return sp.csr_matrix((data.reshape(-1)[self.take], self.indices, self.indptr), shape=(n, n))
 
 
-class _Analysing:
+class _Analysing(_Exact):
     """A direct backend that orders and analyses the block pattern once, and factorises the values per matrix.
 
     The factor is kept while the matrix is unchanged (as :class:`_Factorizing`);
@@ -181,7 +188,7 @@ class _Analysing:
     def factorize(self, matrix: sp.csr_matrix) -> Factor:
         raise NotImplementedError
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+    def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray:
         if system.n_constraints:
             return self._saddle.solve(system, rhs)
         bsr = system.to_bsr()

@@ -122,7 +122,8 @@ class ArrayConjugateGradient(ConjugateGradientSolver):
         self.uploaded_bytes += array.nbytes
         return self.backend.to_device(array)
 
-    def _pcg(self, system: BlockSystem, matrix: sp.bsr_matrix, rhs: np.ndarray, x0: np.ndarray) -> PCGResult:
+    def _pcg(self, system: BlockSystem, matrix: sp.bsr_matrix, rhs: np.ndarray, x0: np.ndarray,
+             tolerance: float) -> PCGResult:
         self.setups += 1
         inverse = BlockJacobi(system.diag).inverse
         ndof = system.ndof
@@ -135,7 +136,7 @@ class ArrayConjugateGradient(ConjugateGradientSolver):
             self._jacobi = block_diagonal_csr(self.backend, system.n_blocks, ndof)
         self._jacobi.data = self._upload(inverse).reshape(-1)
         result = pcg(product.__matmul__, self._jacobi.__matmul__, self._upload(rhs), self._upload(x0),
-                     self.tolerance, self.MAX_ITERATIONS, self._ritz)
+                     tolerance, self.MAX_ITERATIONS, self._ritz)
         return replace(result, x=self.backend.to_host(result.x))
 
 

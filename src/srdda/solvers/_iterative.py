@@ -435,39 +435,44 @@ class ConjugateGradientSolver:
         self._ritz = 0.5 * smallest_eigenvalue_estimate(matrix.__matmul__, self._amg, start, self.PROBE_ITERATIONS)
         return self._amg
 
-    def _pcg(self, system: BlockSystem, matrix: sp.bsr_matrix, rhs: np.ndarray, x0: np.ndarray) -> PCGResult:
+    def _pcg(self, system: BlockSystem, matrix: sp.bsr_matrix, rhs: np.ndarray, x0: np.ndarray,
+             tolerance: float) -> PCGResult:
         if self.preconditioner == "jacobi":
             self.setups += 1
-            return block_jacobi_pcg(matrix, BlockJacobi(system.diag), rhs, x0, self.tolerance, self.MAX_ITERATIONS,
+            return block_jacobi_pcg(matrix, BlockJacobi(system.diag), rhs, x0, tolerance, self.MAX_ITERATIONS,
                                     self._ritz)
         if self._amg is not None and self._amg.hierarchy.levels[0].A.shape == matrix.shape:
-            first = pcg(matrix.__matmul__, self._amg, rhs, x0, self.tolerance, self.REBUILD_ITERATIONS, self._ritz)
+            first = pcg(matrix.__matmul__, self._amg, rhs, x0, tolerance, self.REBUILD_ITERATIONS, self._ritz)
             if first.converged:
                 return first
             x0 = first.x
         else:
             first = None
         hierarchy = self._build_hierarchy(matrix)  # sets the estimate self._ritz
-        second = pcg(matrix.__matmul__, hierarchy, rhs, x0, self.tolerance, self.MAX_ITERATIONS, self._ritz)
+        second = pcg(matrix.__matmul__, hierarchy, rhs, x0, tolerance, self.MAX_ITERATIONS, self._ritz)
         return second if first is None else replace(second, iterations=first.iterations + second.iterations)
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+    def inexact(self, system: BlockSystem) -> bool:
+        return not system.n_constraints  # constrained systems go to the direct backend
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray:
         if system.n_constraints:
             return self.direct.solve(system, rhs)
+        tolerance = self.tolerance if tolerance is None else tolerance
         matrix = system.to_bsr()
         if self._x is None or len(self._x) != len(rhs):
             if self._x is not None or self.preconditioner == "jacobi":  # another model: forget its estimate
                 self._ritz = np.inf
             self._x = np.zeros_like(rhs)
         try:
-            result = self._pcg(system, matrix, rhs, self._x)
+            result = self._pcg(system, matrix, rhs, self._x, tolerance)
         except IterativeSolverError as exc:
             self._x = None
             raise SolverError(f"{self.name}: {exc}") from exc
         if not result.converged:
             self._x = None
             raise SolverError(f"{self.name}: the conjugate gradient did not reach the displacement tolerance "
-                              f"{self.tolerance:.3g} m in {result.iterations} iterations (estimated error "
+                              f"{tolerance:.3g} m in {result.iterations} iterations (estimated error "
                               f"{result.final_residual / result.smallest_ritz:.3g} m)")
         self._ritz = result.smallest_ritz
         self.iterations.append(result.iterations)

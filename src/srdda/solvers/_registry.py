@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
 
 __all__ = ["LinearSolver", "SolverError", "SolverFactory", "DEFAULT_TOLERANCE", "DEVICES", "register_solver",
-           "get_solver", "available_solvers", "best_direct", "check_finite"]
+           "get_solver", "available_solvers", "best_direct", "check_finite", "solves_inexactly"]
 
 # The iterative backends stop when every unknown of the increment is estimated within this of the exact
 # solution (m; rad and 1 for rotations and strains, i.e. m per m of block size): 1e-9 m keeps 200 steps
@@ -31,9 +31,25 @@ class SolverError(RuntimeError):
 
 
 class LinearSolver(Protocol):
+    """A backend: ``solve`` returns the increments of ``system`` for ``rhs``.
+
+    A backend that stops at a displacement tolerance also has
+    ``inexact(system) -> bool`` (True where it stops that system at one) and
+    takes ``tolerance`` (m), one solve's tolerance in place of its own (a
+    Newton iteration asks for a looser one while its contacts still change
+    state, :func:`solves_inexactly`); one without ``inexact`` is exact and is
+    never passed a tolerance.
+    """
+
     name: str
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray: ...
+    def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray: ...
+
+
+def solves_inexactly(solver: LinearSolver, system: BlockSystem) -> bool:
+    """Whether ``solver`` stops ``system`` at a tolerance (its ``inexact``; a backend without one is exact)."""
+    inexact = getattr(solver, "inexact", None)
+    return bool(inexact(system)) if inexact is not None else False
 
 
 SolverFactory = Callable[[float], LinearSolver]  # the displacement tolerance (m) -> a solver for one run

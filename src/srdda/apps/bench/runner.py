@@ -67,7 +67,7 @@ from ...modeldata.arrays import ModelArrays
 from ...results import Result
 from ...settings import RunSettings, ContactSolverName
 from ...step import Stepper
-from ...solvers import DEFAULT_TOLERANCE
+from ...solvers import DEFAULT_TOLERANCE, solves_inexactly
 from ...term import CUT_CAUSES
 from .models import brick_wall, english_bond_wall, jointed_slope, jointed_slope_3d
 
@@ -204,14 +204,18 @@ class _TimedSolver:
     def __init__(self, inner: Any, probe: Probe) -> None:
         probe.solvers.append(inner)
         self.name = inner.name
+        self._inner = inner
         self._probe = probe
         self._solve = probe.timed("solve", inner.solve)
 
-    def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+    def inexact(self, system: BlockSystem) -> bool:
+        return solves_inexactly(self._inner, system)
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray:
         if time.perf_counter() > self._probe.deadline:
             raise WallTimeLimit
         self._probe.solves += 1
-        return self._solve(system, rhs)
+        return self._solve(system, rhs) if tolerance is None else self._solve(system, rhs, tolerance)
 
 
 def cg_iterations(solver: Any) -> list[int]:
