@@ -181,11 +181,18 @@ class NewtonContactStep(ContactStep):
         return shear - along[:, None] * self.slip_direction
 
     # -- a solve -------------------------------------------------------------
+    def _increments(self, dd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The gaps' and shears' increments by the springs' rows in one compiled pass, at every size: a Newton
+        run is not the paper's, whose small models keep the contact terms' einsums to the last bit."""
+        assert self._springs is not None
+        return self._springs.increments(dd)
+
     def add_to(self, system: BlockSystem, ctx: StepContext) -> None:
         r = self.record
         springs = self._springs_at(ctx)
         c_p = ctx.coeffs.c_p
         self._c_p = c_p
+        # by changes to the last solve's sums at every size (as :meth:`_increments`)
         springs.add_to(system, self._shi_normal(self.normal_on), self.stick, c_p, by_changes=ctx.theta is None)
         self.add_water(system, springs)
         if self.impacts is not None:  # the impact law linearised at the last iterate's gaps

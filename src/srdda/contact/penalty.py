@@ -110,10 +110,10 @@ class ContactSprings:
     def add_to(self, system: BlockSystem, normal: np.ndarray, shear: np.ndarray, c_p: float,
                by_changes: bool) -> None:
         """Add the normal springs where ``normal`` and the shear springs where ``shear`` to ``system`` (matrix
-        weight c_p, module doc): by changes to the last call's sums if ``by_changes`` and the system has more
-        than ``INCREMENTAL_BLOCKS`` blocks, else afresh."""
+        weight c_p, module doc): by changes to the last call's sums if ``by_changes`` (the open-close solver
+        asks so above ``INCREMENTAL_BLOCKS`` blocks, the Newton solver at every size), else afresh."""
         acting = np.flatnonzero(normal | shear)
-        if not (by_changes and is_large(system.n_blocks)):
+        if not by_changes:
             if len(acting):
                 add_penalty_pairs(system, self.springs(acting, normal, shear), c_p)
             return

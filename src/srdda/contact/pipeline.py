@@ -233,7 +233,7 @@ class ContactStep:
         self._solved_state = self.state.copy()  # the states of this solve's forces (for work)
         # by changes while the shapes stay those of the step (Shi's T at t, not the secant pass's)
         springs.add_to(system, self._shi_normal(self.state != OPEN), self.state == LOCKED, ctx.coeffs.c_p,
-                       by_changes=ctx.theta is None)
+                       by_changes=ctx.theta is None and is_large(system.n_blocks))
         self.add_water(system, springs)
         if self.impacts is not None:
             i = self.impacts.index
