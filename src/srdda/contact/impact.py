@@ -18,7 +18,7 @@ from ..assembly.blocks import mass_matrices
 from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs
 from ..term import StepContext
 from .candidates import pair_keys
-from .law import impact_damping_ratio, impact_force
+from .law import impact_damping_ratio, impact_force, impact_potential
 
 __all__ = ["ImpactSprings", "ImpactWarning", "SETTLED", "RESOLVED"]
 
@@ -65,10 +65,21 @@ class ImpactSprings:
         """The force (n,) the last solve's linear model gives at end gaps ``gap1``."""
         return self.force - self.slope * (gap1 - self.solved_at)
 
+    def law(self, gap1: np.ndarray) -> np.ndarray:
+        """The impact law's force (n,) at end gaps ``gap1``, with the last solve's dashpots."""
+        return impact_force(self.gap0, gap1, self.stiffness, self.dashpot)[0]
+
+    def potential(self, gap1: np.ndarray, linearised: bool) -> np.ndarray:
+        """ψ (n,) with ∂ψ/∂g1 = −N at end gaps ``gap1``: of the law (:func:`~.law.impact_potential`), or of the
+        last solve's linear model, −N·g1 + ½s(g1 − g_lin)² (up to a constant)."""
+        if linearised:
+            return -self.force * gap1 + 0.5 * self.slope * (gap1 - self.solved_at) ** 2
+        return impact_potential(self.gap0, gap1, self.stiffness, self.dashpot)
+
     def settled(self, gap1: np.ndarray) -> bool:
         """Whether the last solve's force is the impact law's at its end gaps ``gap1``; moves the linearisation
         there for the next solve."""
-        exact, _ = impact_force(self.gap0, gap1, self.stiffness, self.dashpot)
+        exact = self.law(gap1)
         scale = self.stiffness * np.maximum(np.abs(self.gap0), np.abs(gap1))
         done = bool(np.all(np.abs(exact - self.applied(gap1)) <= SETTLED * scale))
         self.at = gap1.copy()
@@ -78,14 +89,15 @@ class ImpactSprings:
         """½k_n·p² (J, per m in 2D) of the springs at gaps ``gap``, p = min(g, 0)."""
         return 0.5 * float(np.sum(self.stiffness * np.minimum(gap, 0.0) ** 2))
 
-    def work(self, gap1: np.ndarray) -> float:
-        """Work (J, per m in 2D) of the last solve's forces on the blocks over the step: N·Δg (N pushes the gap
-        open)."""
-        return float(np.sum(self.applied(gap1) * (gap1 - self.gap0)))
+    def work(self, gap1: np.ndarray, law: bool = False) -> float:
+        """Work (J, per m in 2D) over the step of the last solve's forces on the blocks (``law``: of the impact
+        law's at ``gap1``, what a converged Newton step applied): N·Δg (N pushes the gap open)."""
+        return float(np.sum((self.law(gap1) if law else self.applied(gap1)) * (gap1 - self.gap0)))
 
-    def loss(self, gap1: np.ndarray) -> float:
-        """What the springs took out over the step: their negative work minus the change of ½k_n·p²."""
-        return -self.work(gap1) - (self.energy(gap1) - self.energy(self.gap0))
+    def loss(self, gap1: np.ndarray, law: bool = False) -> float:
+        """What the springs took out over the step: their negative work (:meth:`work`) minus the change of
+        ½k_n·p²."""
+        return -self.work(gap1, law) - (self.energy(gap1) - self.energy(self.gap0))
 
     def viscosity(self, rows_a: np.ndarray, rows_b: np.ndarray, ctx: StepContext) -> np.ndarray:
         """c/Δt (n,) of the dashpots: c = 2ζ·k_n/ω, ζ from e_n and ωΔt (:func:`impact_damping_ratio`).

@@ -68,7 +68,7 @@ import numpy as np
 
 from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
 from ..term import StepContext
-from .law import ContactLaw, JointResponse, impact_force, impact_potential
+from .law import ContactLaw, JointResponse
 from .openclose import LOCKED, OPEN, SLIDING, magnitudes, negligible_force
 from .pipeline import ContactKind, ContactModel, ContactParameters, ContactSet, ContactStep, ContactTerm
 from .record import ContactRecord
@@ -142,28 +142,29 @@ class NewtonContactStep(ContactStep):
         tau = self.yield_force()
         tension = self.response.tension
         if model:
-            normal = self._impact_normal(np.where(self.normal_on, kn * gap, tension), gap, model)
+            normal = self._at_impacts(np.where(self.normal_on, kn * gap, tension), gap, model, potential=False)
             sliding = self.slip[:, None]
             tangent = self._tangent_stiffness(tau)[:, None] * self._across(shear)
             shear_force = np.where(self.stick[:, None], ks[:, None] * shear,
                                    np.where(sliding, tau[:, None] * self.slip_direction + tangent, 0.0))
             return normal, shear_force
-        normal = self._impact_normal(np.minimum(kn * gap, tension), gap, model)
+        normal = self._at_impacts(np.minimum(kn * gap, tension), gap, model, potential=False)
         trial = ks[:, None] * shear
         size = magnitudes(trial)
         within = size <= tau
         return normal, np.where(within[:, None], trial, tau[:, None] * _units(shear))
 
-    def _impact_normal(self, normal: np.ndarray, gap: np.ndarray, model: bool) -> np.ndarray:
-        """``normal`` (γ_n, n) with the contacts of a restitution given their impact law's force (−N) at effective
-        gaps ``gap``: the law's, or (``model``) the last solve's linearisation of it (:mod:`.impact`)."""
+    def _at_impacts(self, normal: np.ndarray, gap: np.ndarray, model: bool, potential: bool) -> np.ndarray:
+        """The normal springs' forces γ_n (or, ``potential``, their ψ_n) (n,) with the contacts of a restitution
+        given their impact law's −N (or ψ) at effective gaps ``gap``: the law's, or (``model``) that of the last
+        solve's linearisation (:class:`~srdda.contact.impact.ImpactSprings`)."""
         impacts = self.impacts
         if impacts is None:
             return normal
         end = gap[impacts.index]
         out = normal.copy()
-        out[impacts.index] = -(impacts.applied(end) if model else
-                               impact_force(impacts.gap0, end, impacts.stiffness, impacts.dashpot)[0])
+        out[impacts.index] = impacts.potential(end, model) if potential else \
+            -(impacts.applied(end) if model else impacts.law(end))
         return out
 
     def _tangent_stiffness(self, tau: np.ndarray) -> np.ndarray:
@@ -242,28 +243,14 @@ class NewtonContactStep(ContactStep):
                 + 0.5 * self._tangent_stiffness(tau) * np.einsum("nk,nk->n", across, across)
             shear_energy = np.where(self.stick, 0.5 * ks * np.einsum("nk,nk->n", shear, shear),
                                     np.where(self.slip, slip, 0.0))
-            return float(np.sum(self._impact_potentials(normal, gap, model)) + np.sum(shear_energy))
+            return float(np.sum(self._at_impacts(normal, gap, model, potential=True)) + np.sum(shear_energy))
         capped = kn * gap > tension
-        normal = self._impact_potentials(np.where(capped, tension * gap - 0.5 * tension**2 / kn, 0.5 * kn * gap**2),
-                                         gap, model)
+        normal = self._at_impacts(np.where(capped, tension * gap - 0.5 * tension**2 / kn, 0.5 * kn * gap**2),
+                                  gap, model, potential=True)
         size = magnitudes(shear)
         limit = tau / ks
         shear_energy = np.where(size <= limit, 0.5 * ks * size**2, tau * size - 0.5 * tau * limit)
         return float(np.sum(normal) + np.sum(shear_energy))
-
-    def _impact_potentials(self, normal: np.ndarray, gap: np.ndarray, model: bool) -> np.ndarray:
-        """``normal`` (n,) with the contacts of a restitution given their impact law's potential at gaps ``gap``
-        (:func:`~srdda.contact.law.impact_potential`), or that of its linearisation −N·g + ½s(g − g_lin)²."""
-        impacts = self.impacts
-        if impacts is None:
-            return normal
-        end = gap[impacts.index]
-        out = normal.copy()
-        if model:
-            out[impacts.index] = -impacts.force * end + 0.5 * impacts.slope * (end - impacts.solved_at) ** 2
-        else:
-            out[impacts.index] = impact_potential(impacts.gap0, end, impacts.stiffness, impacts.dashpot)
-        return out
 
     def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
         """α in (0, 1] along Δd_k + α·δ that decreases Π enough (Armijo, backtracking); ``curvature()`` gives
@@ -486,12 +473,7 @@ class NewtonContactStep(ContactStep):
     def impact_loss(self) -> float:
         """What the impact springs took out over the step: the negative work of the law's force (the force of
         :meth:`work`, not the last linearisation's) less the change of ½k_n·p²."""
-        if self.impacts is None:
-            return 0.0
-        impacts = self.impacts
-        end = self.gap[impacts.index]
-        force, _ = impact_force(impacts.gap0, end, impacts.stiffness, impacts.dashpot)
-        return -float(np.dot(force, end - impacts.gap0)) - (impacts.energy(end) - impacts.energy(impacts.gap0))
+        return 0.0 if self.impacts is None else self.impacts.loss(self.gap[self.impacts.index], law=True)
 
     def work(self, dd: np.ndarray, c_p: float) -> tuple[float, float]:
         """(friction, springs): minus the plastic dissipation τ·|slip| of the step, and the work of every
