@@ -70,8 +70,9 @@ class ImpactSprings:
         return impact_force(self.gap0, gap1, self.stiffness, self.dashpot)[0]
 
     def potential(self, gap1: np.ndarray, linearised: bool) -> np.ndarray:
-        """ψ (n,) with ∂ψ/∂g1 = −N at end gaps ``gap1``: of the law (:func:`~.law.impact_potential`), or of the
-        last solve's linear model, −N·g1 + ½s(g1 − g_lin)² (up to a constant)."""
+        """ψ (n,) with ∂ψ/∂g1 = −N at end gaps ``gap1``: of the law
+        (:func:`~srdda.contact.law.impact_potential`), or of the last solve's linear model,
+        −N·g1 + ½s(g1 − g_lin)² (up to a constant)."""
         if linearised:
             return -self.force * gap1 + 0.5 * self.slope * (gap1 - self.solved_at) ** 2
         return impact_potential(self.gap0, gap1, self.stiffness, self.dashpot)
