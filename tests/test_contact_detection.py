@@ -239,3 +239,26 @@ def test_kept_candidates_are_the_fresh_broad_phase_in_its_order(dim):
         assert np.array_equal(kept(vertices, boxes), find(boxes, d0))
         centres += rng.uniform(-0.3 * d0, 0.3 * d0, (n, dim))
     assert 5 < kept.searches < steps
+
+
+@pytest.mark.parametrize("room", [0, 4])
+def test_parallel_narrow_phase_finds_the_serial_rows_in_their_order(room):
+    # the narrow phase of large models shares chunks of pairs among threads; each chunk writes into room for
+    # `room` rows a pair, and a chunk that finds more is found again on one thread. With no room every chunk
+    # is found again, with room for 4 none (a brick finds fewer than 2 rows a directed pair): both must give
+    # the serial rows, row for row, on a brick wall whose corners are jittered within the contact distance
+    # (some slightly penetrating)
+    from srdda.apps.bench.models import brick_wall
+    from srdda.contact.narrowphase2d import narrow_phase_2d, narrow_phase_2d_parallel
+    model, _ = brick_wall(24, 12)
+    arrays = model.arrays()
+    cm = ContactModel(arrays, ContactParameters(1e9, 4e8, 2e-3, np.radians(3.0), 1e-3))
+    detector = cm.detector
+    jitter = np.random.default_rng(3).uniform(-8e-4, 8e-4, arrays.vertex_position.shape)
+    vertices = arrays.vertex_position + jitter
+    boxes, pairs = detector.pairs(vertices)
+    args = (vertices, arrays.block_ptr, arrays.vertex_block, arrays.vertex_next, detector.previous_vertex, pairs,
+            boxes, detector.distance, detector.sin_tol, detector.max_penetration)
+    serial = narrow_phase_2d(*args)
+    assert 0 < len(serial) < 2 * len(pairs)
+    assert np.array_equal(narrow_phase_2d_parallel(*args, room), serial)

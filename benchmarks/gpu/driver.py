@@ -11,6 +11,8 @@ what it could not do in the time left:
 * ``bench``: ``python -m srdda bench --json`` of the large models on the GPU and on the CPU;
 * ``wall1m``: a 1,000,000-block 2D wall, built first (one core), then stepped on the GPU once the file
   ``--go`` exists, until the deadline;
+* ``profile``: where a step's time goes: ``--steps`` steps of ``--model`` on ``--device`` under cProfile (after
+  one step that compiles), the functions that took the most time of their own;
 * ``summary``: the short table of all of it.
 
 ``--fake-gpu`` runs the GPU path on numpy (the same array code) so that the script can be rehearsed on
@@ -260,6 +262,48 @@ def wall1m(args: argparse.Namespace, backend: ArrayBackend) -> None:
     _write(args.out, row)
 
 
+def profile(args: argparse.Namespace) -> None:
+    import cProfile
+    import pstats
+
+    from srdda.solvers import get_solver
+    from srdda.step import default_terms
+
+    t0 = time.perf_counter()
+    model, settings = _build(args.model, args.small)
+    arrays = model.arrays()
+    settings = replace(settings, device=args.device)
+    solver = get_solver(settings.solver, settings.solver_tolerance, settings.resolved_device(arrays.n_blocks))
+    stepper = Stepper(arrays, settings, solver, default_terms(arrays, settings))
+    state, dt = initial_state(arrays, stepper.method), settings.dt
+    built = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    outcome = stepper.step(state, dt)  # compiles
+    first = time.perf_counter() - t0
+    state = outcome.state if outcome.status == "accepted" else state
+    steps = []
+    profiler = cProfile.Profile()
+    for _ in range(args.steps):
+        if _left(args.deadline) < 0:
+            break
+        t0 = time.perf_counter()
+        profiler.enable()
+        outcome = stepper.step(state, dt)
+        profiler.disable()
+        steps.append({"status": outcome.status, "solves": outcome.solves, "s": time.perf_counter() - t0})
+        state = outcome.state if outcome.status == "accepted" else state
+    stats = pstats.Stats(profiler)
+    top = sorted(stats.stats.items(), key=lambda kv: -kv[1][2])[:args.top]  # type: ignore[attr-defined]
+    rows = [{"function": f"{Path(f).name}:{line}({name})", "calls": int(nc), "own_s": own, "total_s": total}
+            for (f, line, name), (_, nc, own, total, _) in top]
+    result = {"model": args.model, "device": args.device, "blocks": arrays.n_blocks, "build_s": built,
+              "first_step_s": first, "steps": steps, "threads": os.environ.get("NUMBA_NUM_THREADS"), "top": rows}
+    for r in rows:
+        print(f"{r['own_s']:8.3f} {r['total_s']:8.3f} {r['calls']:6d}  {r['function']}", flush=True)
+    print(json.dumps(steps), flush=True)
+    _write(args.out, result)
+
+
 def _fmt(x: Any, spec: str) -> str:
     return "-" if x is None else format(x, spec)
 
@@ -337,11 +381,14 @@ def summary(args: argparse.Namespace) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("what", choices=("systems", "compare", "bench", "wall1m", "summary"))
+    ap.add_argument("what", choices=("systems", "compare", "bench", "wall1m", "profile", "summary"))
     ap.add_argument("--out", type=Path, required=True, help="the JSON file to write (summary: the folder)")
     ap.add_argument("--deadline", type=float, default=time.time() + 3600.0)
     ap.add_argument("--go", default=None, help="wall1m: steps once this file exists")
-    ap.add_argument("--steps", type=int, default=3, help="wall1m: steps to make at most")
+    ap.add_argument("--steps", type=int, default=3, help="wall1m, profile: steps to make at most")
+    ap.add_argument("--model", default="wall_100k", help="profile: the bench model")
+    ap.add_argument("--device", default="gpu", help="profile: the device")
+    ap.add_argument("--top", type=int, default=40, help="profile: how many functions to list")
     ap.add_argument("--timeout", type=float, default=120.0, help="bench: wall-time limit per model (s)")
     ap.add_argument("--devices", default="gpu,cpu", help="bench: the devices, in order")
     ap.add_argument("--fake-gpu", action="store_true", help="the GPU path on numpy (a rehearsal without a GPU)")
@@ -355,6 +402,8 @@ def main() -> None:
         summary(args)
     elif args.what == "bench":
         bench(args)
+    elif args.what == "profile":
+        profile(args)
     else:
         backend = numpy_backend() if args.fake_gpu else cupy_backend()
         {"systems": systems, "compare": compare, "wall1m": wall1m}[args.what](args, backend)

@@ -115,9 +115,10 @@ class PairFinder:
 @njit(cache=True)
 def push_row(buf: np.ndarray, n: int, row: tuple) -> np.ndarray:
     """``buf`` with ``row`` (a tuple of integers) written as its row ``n``, in a copy twice as long when row n
-    would not fit: the rows the compiled broad and narrow phases find, without knowing how many they will find."""
+    would not fit (16 rows at least): the rows the compiled broad and narrow phases find, without knowing how many
+    they will find."""
     if n >= buf.shape[0]:
-        bigger = np.empty((GROWTH * buf.shape[0], buf.shape[1]), dtype=buf.dtype)
+        bigger = np.empty((max(GROWTH * buf.shape[0], n + 16), buf.shape[1]), dtype=buf.dtype)
         bigger[:n] = buf[:n]
         buf = bigger
     for j in range(len(row)):

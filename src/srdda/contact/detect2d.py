@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..assembly.system import PARALLEL_BLOCKS
 from ..geometry.polygon import previous_vertex_index
 from ..modeldata.arrays import ModelArrays
 from .broadphase2d import candidate_pairs_2d
 from .candidates import PairFinder
-from .narrowphase2d import FOUND_EDGE, FOUND_VERTEX, narrow_phase_2d
+from .narrowphase2d import FOUND_EDGE, FOUND_VERTEX, narrow_phase_2d, narrow_phase_2d_parallel
 from .record import ContactRecord
 
 __all__ = ["Detector2D", "edge_shares"]
@@ -71,7 +72,8 @@ class Detector2D:
         boxes, pairs = self.pairs(vertices)
         if len(pairs) == 0:
             return None
-        found = narrow_phase_2d(vertices, arr.block_ptr, arr.vertex_block, arr.vertex_next, self.previous_vertex,
+        narrow = narrow_phase_2d_parallel if arr.n_blocks > PARALLEL_BLOCKS else narrow_phase_2d
+        found = narrow(vertices, arr.block_ptr, arr.vertex_block, arr.vertex_next, self.previous_vertex,
                                 pairs, boxes, self.distance, self.sin_tol, self.max_penetration)
         if len(found) == 0:
             return None

@@ -36,12 +36,12 @@ Output: contact vertex, contacted edge (index of its start vertex) and kind
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .candidates import both_ways, push_row
 
 __all__ = ["VERTEX_EDGE", "VERTEX_VERTEX", "FOUND_VERTEX", "FOUND_EDGE", "FOUND_KIND", "FOUND_FIELDS",
-           "narrow_phase_2d"]
+           "narrow_phase_2d", "narrow_phase_2d_parallel"]
 
 VERTEX_EDGE = 0
 VERTEX_VERTEX = 1
@@ -56,6 +56,11 @@ CORNER = 1e-9
 # columns of a detected-contact row [vertex, edge start, kind]
 FOUND_VERTEX, FOUND_EDGE, FOUND_KIND = range(3)
 FOUND_FIELDS = 3
+
+# the parallel narrow phase's share of work (directed candidate pairs) and the rows it makes room for per pair
+# (a brick against its neighbour finds 2-3; a chunk that finds more is found again on one thread)
+CHUNK_PAIRS = 256
+CHUNK_ROOM = 4
 
 
 @njit(cache=True)
@@ -222,6 +227,38 @@ def _duplicate(X, block_ptr, nxt, prv, a, v, q, chosen, d0, sin_tol, max_depth):
 
 
 @njit(cache=True)
+def _pair_contacts(X, block_ptr, nxt, prv, boxes, d0, sin_tol, max_depth, a, b, buf, n):
+    """(buf, n) with the contacts of a's vertices against b's edges appended as rows from n on."""
+    d02 = d0 * d0
+    for v in range(block_ptr[a], block_ptr[a + 1]):
+        x = X[v, 0]
+        y = X[v, 1]
+        if x < boxes[b, 0] - d0 or x > boxes[b, 2] + d0 or y < boxes[b, 1] - d0 or y > boxes[b, 3] + d0:
+            continue
+        for e in range(block_ptr[b], block_ptr[b + 1]):
+            if (x - X[e, 0]) ** 2 + (y - X[e, 1]) ** 2 < d02:  # vertex-vertex with q = e
+                chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
+                if chosen >= 0 and not _duplicate(X, block_ptr, nxt, prv, a, v, e, chosen, d0, sin_tol, max_depth) \
+                        and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
+                        and _plausible(X, block_ptr, nxt, prv, b, v, chosen, max_depth, sin_tol):
+                    buf = push_row(buf, n, (v, chosen, VERTEX_VERTEX))
+                    n += 1
+            if _vertex_edge(X, block_ptr, nxt, prv, b, v, e, d0, sin_tol, max_depth):
+                buf = push_row(buf, n, (v, e, VERTEX_EDGE))
+                n += 1
+    return buf, n
+
+
+@njit(cache=True)
+def _chunk_contacts(X, block_ptr, nxt, prv, directed, boxes, d0, sin_tol, max_depth, start, stop, buf, n):
+    """(buf, n) with the contacts of the directed pairs start..stop appended, in their order."""
+    for k in range(start, stop):
+        buf, n = _pair_contacts(X, block_ptr, nxt, prv, boxes, d0, sin_tol, max_depth, directed[k, 0],
+                                directed[k, 1], buf, n)
+    return buf, n
+
+
+@njit(cache=True)
 def narrow_phase_2d(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_tol, max_depth):
     """Contacts (k, 3) [vertex, edge start, kind] of the candidate ``pairs`` (k, 2).
 
@@ -229,24 +266,44 @@ def narrow_phase_2d(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_
     block no deeper than ``max_depth`` (an accepted step never penetrates
     deeper, so anything else is a vertex on the far side of a thin block).
     """
-    buf = np.empty((max(16, 4 * len(pairs)), 3), dtype=np.int64)
-    n = 0
-    for a, b in both_ways(pairs):
-        for v in range(block_ptr[a], block_ptr[a + 1]):
-            x = X[v, 0]
-            y = X[v, 1]
-            if x < boxes[b, 0] - d0 or x > boxes[b, 2] + d0 or y < boxes[b, 1] - d0 or y > boxes[b, 3] + d0:
-                continue
-            d02 = d0 * d0
-            for e in range(block_ptr[b], block_ptr[b + 1]):
-                if (x - X[e, 0]) ** 2 + (y - X[e, 1]) ** 2 < d02:  # vertex-vertex with q = e
-                    chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
-                    if chosen >= 0 and not _duplicate(X, block_ptr, nxt, prv, a, v, e, chosen, d0, sin_tol, max_depth) \
-                            and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
-                            and _plausible(X, block_ptr, nxt, prv, b, v, chosen, max_depth, sin_tol):
-                        buf = push_row(buf, n, (v, chosen, VERTEX_VERTEX))
-                        n += 1
-                if _vertex_edge(X, block_ptr, nxt, prv, b, v, e, d0, sin_tol, max_depth):
-                    buf = push_row(buf, n, (v, e, VERTEX_EDGE))
-                    n += 1
+    directed = both_ways(pairs)
+    buf = np.empty((max(16, 4 * len(pairs)), FOUND_FIELDS), dtype=np.int64)
+    buf, n = _chunk_contacts(X, block_ptr, nxt, prv, directed, boxes, d0, sin_tol, max_depth, 0, len(directed),
+                             buf, 0)
     return buf[:n].copy()
+
+
+@njit(parallel=True, cache=True)
+def narrow_phase_2d_parallel(X, block_ptr, vertex_block, nxt, prv, pairs, boxes, d0, sin_tol, max_depth,
+                             room_per_pair=CHUNK_ROOM):
+    """:func:`narrow_phase_2d` with chunks of :data:`CHUNK_PAIRS` directed pairs shared among threads: the
+    same rows in the same order.
+
+    Each chunk writes into its own slots (room for ``room_per_pair`` rows a pair); a chunk that found more is
+    found again on one thread while the chunks' rows are joined in order.
+    """
+    directed = both_ways(pairs)
+    chunks = (len(directed) + CHUNK_PAIRS - 1) // CHUNK_PAIRS
+    room = room_per_pair * CHUNK_PAIRS
+    slots = np.empty((chunks * room, FOUND_FIELDS), dtype=np.int64)
+    counts = np.zeros(chunks, dtype=np.int64)
+    for c in prange(chunks):
+        start = c * CHUNK_PAIRS
+        own = slots[c * room:(c + 1) * room]
+        found, n = _chunk_contacts(X, block_ptr, nxt, prv, directed, boxes, d0, sin_tol, max_depth, start,
+                                   min(start + CHUNK_PAIRS, len(directed)), own, 0)
+        counts[c] = n
+        if n > room:  # found in a longer copy: the chunk is found again below
+            counts[c] = -1
+    out = np.empty((max(16, 4 * len(pairs)), FOUND_FIELDS), dtype=np.int64)
+    n = 0
+    for c in range(chunks):
+        start = c * CHUNK_PAIRS
+        if counts[c] < 0:
+            out, n = _chunk_contacts(X, block_ptr, nxt, prv, directed, boxes, d0, sin_tol, max_depth, start,
+                                     min(start + CHUNK_PAIRS, len(directed)), out, n)
+        else:
+            for i in range(counts[c]):
+                out = push_row(out, n, (slots[c * room + i, 0], slots[c * room + i, 1], slots[c * room + i, 2]))
+                n += 1
+    return out[:n].copy()
