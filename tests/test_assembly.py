@@ -166,6 +166,24 @@ def test_coupling_blocks_picked_by_which_equal_the_picked_stack_bit_for_bit():
     assert not np.array_equal(picked.to_dense(), BlockSystem(diag.copy(), np.zeros((nb, ndof))).to_dense())
 
 
+@pytest.mark.parametrize("held", [None, np.array([True, False, False, True, False, False, False])])
+def test_quadratic_form_is_x_dot_a_x(held):
+    # the line search's curvature xᵀAx without the matrix: stacks whole and picked by `which`, with and
+    # without held blocks (whose couplings drop out and whose rows are the identity's). Against the dense
+    # matrix, whose sums come in another order: 1e-12 of the terms' magnitude Σ|x_i A_ij x_j|
+    system, _ = _random_system(seed=4)
+    rng = np.random.default_rng(5)
+    extra = rng.normal(size=(9, 6, 6))
+    bi = rng.integers(0, 7, 9)
+    system.add_off_diagonal(bi, (bi + 1 + rng.integers(0, 6, 9)) % 7, extra, which=np.array([0, 3, 4, 8]))
+    if held is not None:
+        system.fix_blocks(held)
+    x = rng.normal(size=(7, 6))
+    dense = system.to_dense()
+    scale = float(np.abs(x.ravel()) @ np.abs(dense) @ np.abs(x.ravel()))
+    assert abs(system.quadratic_form(x) - x.ravel() @ dense @ x.ravel()) <= 1e-12 * scale
+
+
 def test_block_order_is_a_stable_sort_of_the_block_keys():
     # to_bsr sums the blocks in this order, so it must be exactly numpy's stable sort of row·nb + col (the
     # order the matrix's bits were made with), with the groups of equal keys and the rows' pointers

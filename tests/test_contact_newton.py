@@ -2,6 +2,7 @@
 conic solver in tests/test_contact_solve_reference.py)."""
 from __future__ import annotations
 
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -59,6 +60,42 @@ def test_a_box_whose_slip_stops_within_a_step_sticks_at_the_next_solve() -> None
     assert int(res.iterations[3]) <= 3  # the step it stops in (measured 7, 5, 3, 2 solves in its four steps)
     # stopped: what is left is the springs' ringing, 1e-4 m/s against 1.08e-2 m/s at the start
     assert float(np.abs(res.array("velocity")[-1][1, :3]).max()) < 1e-3
+
+
+def test_the_tangent_across_a_slip_is_never_stiffer_than_the_shear_spring(monkeypatch) -> None:
+    # a box sliding at 0.22 m/s over a base (φ = 30°), 30 steps of 1 ms. A contact modelled slipping whose yield
+    # force rose with N* after its state was set has |s| < τ/k_s: its tangent τ/|s| across the slip reached
+    # 6.8e8 k_s here (1e21 N/m on slope3d_1k), and the dense solve warned of a matrix with rcond 9e-20. The
+    # tangent is τ/|s| where the shear is beyond the elastic range, k_s within it (where the two meet)
+    from srdda.contact.newton import NewtonContactStep
+    from srdda.contact.openclose import magnitudes
+    ratios = []  # (the tangent used, τ/|s|) over k_s, the largest of every call
+    tangent = NewtonContactStep._tangent_stiffness
+
+    def recorded(self, tau):
+        out = tangent(self, tau)
+        turning = out > 0.0
+        if np.any(turning):
+            ks = self.response.shear_stiffness[turning]
+            exact = tau[turning] / magnitudes(self.slip_shear)[turning]
+            beyond = exact <= ks  # the shear beyond its elastic range: the consistent tangent itself
+            np.testing.assert_array_equal(out[turning][beyond], exact[beyond])
+            ratios.append((float(np.max(out[turning] / ks)), float(np.max(exact / ks))))
+        return out
+
+    monkeypatch.setattr(NewtonContactStep, "_tangent_stiffness", recorded)
+    m = srdda.Model(gravity=(0.0, 0.0, -9.81))
+    m.add_material("rock", srdda.Material(2600.0, 1e10, 0.25))
+    m.add_joint_material("j", srdda.JointMaterial(friction_angle=30.0), between=[("rock", "rock")])
+    m.add_polyhedron(*box((-3, -3, -1), (3, 3, 0)), "rock", fixed=True)
+    m.add_polyhedron(*box((0, 0, 0), (1, 1, 0.5)), "rock", velocity=(0.2, -0.1, 0.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the ill-conditioned solve's LinAlgWarning
+        res = run(m, RunSettings(dt=1e-3, n_steps=30, penalty=1e10, contact_solver="newton"))
+    assert res.completed, res.status
+    used, exact = np.max(ratios, axis=0)
+    assert exact > 1e3  # the case arises (measured 6.8e8)
+    assert used <= 1.0
 
 
 def test_normal_forces_follow_once_the_active_set_has_nearly_settled() -> None:

@@ -358,12 +358,12 @@ class BlockSystem:
         search needs, without assembling A."""
         value = float(np.einsum("ni,nij,nj->", x, self.diag, x))
         for bi, bj, blocks, which in zip(self.pair_i, self.pair_j, self.pair_blocks, self.pair_which):
-            pick = np.arange(len(bi)) if which is None else which
-            a, b = bi[pick], bj[pick]
+            a, b, stack = (bi, bj, blocks) if which is None else (bi[which], bj[which], blocks[which])
             if self.held is not None:
                 free = ~(self.held[a] | self.held[b])
-                pick, a, b = pick[free], a[free], b[free]
-            value += 2.0 * float(np.einsum("ni,nij,nj->", x[a], blocks[pick], x[b]))
+                if not np.all(free):  # else the stack as it is: no copy of its blocks
+                    a, b, stack = a[free], b[free], stack[free]
+            value += 2.0 * float(np.einsum("ni,nij,nj->", x[a], stack, x[b]))
         return value
 
     def to_dense(self) -> np.ndarray:

@@ -169,12 +169,21 @@ class NewtonContactStep(ContactStep):
 
     def _tangent_stiffness(self, tau: np.ndarray) -> np.ndarray:
         """τ/|s| of the slipping contacts' consistent tangent across ŝ (3D; zero for k = 1: no direction
-        across the slip in 2D)."""
+        across the slip in 2D), at most k_s.
+
+        A contact modelled slipping at an iterate whose shear lies within its elastic range |s| ≤ τ/k_s
+        (its yield force τ rose when N* followed the normal forces after its state was set) would get τ/|s|
+        above k_s: up to 1e21 N/m on slope3d_1k, where the conjugate gradient then stopped after 5,000
+        iterations and the step fell back to a factorisation. At |s| = τ/k_s the two agree, and any positive
+        definite model keeps the line search on the true Π a descent: the cap changes the model, not the
+        problem (docs/dev/contact-solve.md, *A bounded tangent across the slip*).
+        """
         if self.record.frame_width == 1:
             return np.zeros(len(tau))
         size = magnitudes(self.slip_shear)
         turning = self.slip & (size > 0.0) & np.any(self.slip_direction != 0.0, axis=1)
-        return np.where(turning, tau / np.where(size > 0.0, size, 1.0), 0.0)
+        return np.where(turning, np.minimum(tau / np.where(size > 0.0, size, 1.0),
+                                            self.response.shear_stiffness), 0.0)
 
     def _across(self, shear: np.ndarray) -> np.ndarray:
         """(I − ŝŝᵀ)s: the part of the shears across the slip directions of the linear model."""
