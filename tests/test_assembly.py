@@ -70,7 +70,7 @@ def test_block_sums_are_np_add_reduceat_bit_for_bit(threads):
     # of the rest), so the matrix has the bits of the np.add.reduceat it replaced; segment lengths cross
     # numpy's unrolled (8) and blocked (128) pairwise thresholds; a third of the blocks are read transposed;
     # large systems share the segments among threads, each still summed in that order; the blocks are read
-    # from two arrays, the diagonal blocks then the stack (to_bsr does not join them)
+    # from three arrays, the diagonal blocks, the first stack and the rest (to_bsr does not join them)
     from srdda.assembly.system import _segment_sums, _segment_sums_parallel
     rng = np.random.default_rng(4)
     lengths = np.concatenate([rng.integers(1, 12, 400), [8, 9, 10, 16, 17, 128, 129, 130, 257, 1000]])
@@ -83,9 +83,9 @@ def test_block_sums_are_np_add_reduceat_bit_for_bit(threads):
     layouts = np.stack([entries, entries.reshape(6, 6).T.ravel()])
     got = np.empty((len(first), 36))
     sums = _segment_sums if threads == "serial" else _segment_sums_parallel
-    split = total // 3
+    split, second = total // 3, 2 * total // 3
     flat = blocks.reshape(total, 36)
-    sums(flat[:split], flat[split:], order, flip, layouts, first, got)
+    sums(flat[:split], flat[split:second], flat[second:], order, flip, layouts, first, got)
     sorted_blocks = blocks[order]
     sorted_blocks[flip == 1] = np.swapaxes(sorted_blocks[flip == 1], 1, 2)
     assert np.array_equal(got, np.add.reduceat(sorted_blocks, first, axis=0).reshape(len(first), 36))

@@ -33,30 +33,38 @@ def _scatter_rows(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> 
 
 
 @njit(cache=True)
-def _entry(diag: np.ndarray, stack: np.ndarray, row: int, j: int) -> float:
-    """Entry j of stored block ``row`` of [diag; stack] (flattened blocks), without joining the two."""
+def _stored(diag: np.ndarray, stack: np.ndarray, rest: np.ndarray, row: int) -> np.ndarray:
+    """Stored block ``row`` of [diag; stack; rest] (flattened blocks), without joining the three."""
     n = diag.shape[0]
-    return diag[row, j] if row < n else stack[row - n, j]
+    if row < n:
+        return diag[row]
+    return stack[row - n] if row < n + stack.shape[0] else rest[row - n - stack.shape[0]]
 
 
 @njit(cache=True)
-def _pairwise_sum(diag: np.ndarray, stack: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray,
-                  lo: int, n: int, j: int) -> float:
+def _entry(diag: np.ndarray, stack: np.ndarray, rest: np.ndarray, row: int, j: int) -> float:
+    """Entry j of stored block ``row`` of [diag; stack; rest]."""
+    return _stored(diag, stack, rest, row)[j]
+
+
+@njit(cache=True)
+def _pairwise_sum(diag: np.ndarray, stack: np.ndarray, rest: np.ndarray, order: np.ndarray, flip: np.ndarray,
+                  layouts: np.ndarray, lo: int, n: int, j: int) -> float:
     """numpy's pairwise sum of entry j of the blocks at sorted positions lo..lo+n (its add.reduce order,
     loops_utils.h); ``order``, ``flip`` and ``layouts`` as in :func:`_segment_sums`."""
     if n < 8:
         res = 0.0
         for i in range(n):
-            res += _entry(diag, stack, order[lo + i], layouts[flip[lo + i], j])
+            res += _entry(diag, stack, rest, order[lo + i], layouts[flip[lo + i], j])
         return res
     if n <= 128:
         r = np.empty(8)
         for m in range(8):
-            r[m] = _entry(diag, stack, order[lo + m], layouts[flip[lo + m], j])
+            r[m] = _entry(diag, stack, rest, order[lo + m], layouts[flip[lo + m], j])
         i = 8
         while i < n - n % 8:
             for m in range(8):
-                r[m] += _entry(diag, stack, order[lo + i + m], layouts[flip[lo + i + m], j])
+                r[m] += _entry(diag, stack, rest, order[lo + i + m], layouts[flip[lo + i + m], j])
             i += 8
         width = 1  # the tree ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
         while width < 8:
@@ -65,22 +73,23 @@ def _pairwise_sum(diag: np.ndarray, stack: np.ndarray, order: np.ndarray, flip: 
             width += width
         res = r[0]
         while i < n:
-            res += _entry(diag, stack, order[lo + i], layouts[flip[lo + i], j])
+            res += _entry(diag, stack, rest, order[lo + i], layouts[flip[lo + i], j])
             i += 1
         return res
     half = n // 2
     half -= half % 8
-    return (_pairwise_sum(diag, stack, order, flip, layouts, lo, half, j)
-            + _pairwise_sum(diag, stack, order, flip, layouts, lo + half, n - half, j))
+    return (_pairwise_sum(diag, stack, rest, order, flip, layouts, lo, half, j)
+            + _pairwise_sum(diag, stack, rest, order, flip, layouts, lo + half, n - half, j))
 
 
 @njit(cache=True)
-def _segment_sums_of(start: int, stop: int, diag: np.ndarray, stack: np.ndarray, order: np.ndarray,
-                     flip: np.ndarray, layouts: np.ndarray, first: np.ndarray, out: np.ndarray) -> None:
+def _segment_sums_of(start: int, stop: int, diag: np.ndarray, stack: np.ndarray, rest: np.ndarray,
+                     order: np.ndarray, flip: np.ndarray, layouts: np.ndarray, first: np.ndarray,
+                     out: np.ndarray) -> None:
     """``out[s]`` for segments start <= s < stop: the sum of the blocks at sorted positions
     first[s]..first[s+1], as np.add.reduceat sums them.
 
-    The block at sorted position p is row ``order[p]`` of [diag; stack] (n, ndof²),
+    The block at sorted position p is row ``order[p]`` of [diag; stack; rest] (n, ndof²),
     read through ``layouts[flip[p]]`` (``layouts`` (2, ndof²): the entries in
     order, then the transpose's), so no joined, sorted or transposed copy is made. numpy adds a segment's
     first block to the pairwise sum of the others; short segments (the usual case: a few contacts
@@ -88,48 +97,47 @@ def _segment_sums_of(start: int, stop: int, diag: np.ndarray, stack: np.ndarray,
     numpy's pairwise order: the same bits as the reduceat it replaced.
     """
     width = diag.shape[1]
-    n_diag = diag.shape[0]
-    rest = np.empty(width)
+    others = np.empty(width)
     for s in range(start, stop):
         lo = first[s]
         hi = first[s + 1] if s + 1 < first.shape[0] else order.shape[0]
         head = order[lo]
         if hi - lo <= 8:
-            rest[:] = 0.0
+            others[:] = 0.0
             for i in range(lo + 1, hi):
-                row = order[i]
-                block = diag[row] if row < n_diag else stack[row - n_diag]
+                block = _stored(diag, stack, rest, order[i])
                 if flip[i] == 0:
                     for j in range(width):
-                        rest[j] += block[j]
+                        others[j] += block[j]
                 else:
                     for j in range(width):
-                        rest[j] += block[layouts[1, j]]
-            block = diag[head] if head < n_diag else stack[head - n_diag]
+                        others[j] += block[layouts[1, j]]
+            block = _stored(diag, stack, rest, head)
             for j in range(width):
                 value = block[layouts[flip[lo], j]]
-                out[s, j] = value + rest[j] if hi - lo > 1 else value
+                out[s, j] = value + others[j] if hi - lo > 1 else value
         else:
             for j in range(width):
-                rest_sum = _pairwise_sum(diag, stack, order, flip, layouts, lo + 1, hi - lo - 1, j)
-                out[s, j] = _entry(diag, stack, head, layouts[flip[lo], j]) + rest_sum
+                rest_sum = _pairwise_sum(diag, stack, rest, order, flip, layouts, lo + 1, hi - lo - 1, j)
+                out[s, j] = _entry(diag, stack, rest, head, layouts[flip[lo], j]) + rest_sum
 
 
 @njit(cache=True)
-def _segment_sums(diag: np.ndarray, stack: np.ndarray, order: np.ndarray, flip: np.ndarray, layouts: np.ndarray,
-                  first: np.ndarray, out: np.ndarray) -> None:
+def _segment_sums(diag: np.ndarray, stack: np.ndarray, rest: np.ndarray, order: np.ndarray, flip: np.ndarray,
+                  layouts: np.ndarray, first: np.ndarray, out: np.ndarray) -> None:
     """:func:`_segment_sums_of` every segment, on one thread."""
-    _segment_sums_of(0, first.shape[0], diag, stack, order, flip, layouts, first, out)
+    _segment_sums_of(0, first.shape[0], diag, stack, rest, order, flip, layouts, first, out)
 
 
 @njit(parallel=True, cache=True)
-def _segment_sums_parallel(diag: np.ndarray, stack: np.ndarray, order: np.ndarray, flip: np.ndarray,
-                           layouts: np.ndarray, first: np.ndarray, out: np.ndarray) -> None:
+def _segment_sums_parallel(diag: np.ndarray, stack: np.ndarray, rest: np.ndarray, order: np.ndarray,
+                           flip: np.ndarray, layouts: np.ndarray, first: np.ndarray, out: np.ndarray) -> None:
     """:func:`_segment_sums` with chunks of 256 segments shared among threads (each segment is one
     thread's: the same bits)."""
     n = first.shape[0]
     for chunk in prange((n + 255) // 256):
-        _segment_sums_of(256 * chunk, min(256 * chunk + 256, n), diag, stack, order, flip, layouts, first, out)
+        _segment_sums_of(256 * chunk, min(256 * chunk + 256, n), diag, stack, rest, order, flip, layouts, first,
+                         out)
 
 
 def scatter_add(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
@@ -336,15 +344,18 @@ class BlockSystem:
         free = self._free_couplings(bi, bj)
         order, first, cols, indptr = _block_order(np.concatenate([np.arange(nb), bi[free]]),
                                                   np.concatenate([np.arange(nb), bj[free]]), nb)
-        # the sorted blocks as rows of [diag; stacks], read in place or transposed (one stack: not copied)
+        # the sorted blocks as rows of [diag; stacks], read in place or transposed (the first stack, usually the
+        # contacts', and a second not copied; further ones joined to the second)
         width = self.ndof * self.ndof
-        stack = self.pair_blocks[0] if len(self.pair_blocks) == 1 else np.concatenate(self.pair_blocks)
-        stack = np.ascontiguousarray(stack).reshape(len(stack), width)
+        others = self.pair_blocks[1:]
+        rest = np.empty((0, width)) if not others else others[0] if len(others) == 1 else np.concatenate(others)
+        stack = np.ascontiguousarray(self.pair_blocks[0]).reshape(len(self.pair_blocks[0]), width)
+        rest = np.ascontiguousarray(rest).reshape(len(rest), width)
         entries = np.arange(width)
         layouts = np.stack([entries, entries.reshape(self.ndof, self.ndof).T.ravel()])
         data = np.empty((len(first), self.ndof, self.ndof))
         sums = _segment_sums_parallel if nb > PARALLEL_BLOCKS else _segment_sums
-        sums(np.ascontiguousarray(self.diag).reshape(nb, width), stack,
+        sums(np.ascontiguousarray(self.diag).reshape(nb, width), stack, rest,
              np.concatenate([np.arange(nb), source[free]])[order],
              np.concatenate([np.zeros(nb, dtype=np.int8), flip[free]])[order], layouts, first,
              data.reshape(len(first), -1))
@@ -357,13 +368,11 @@ class BlockSystem:
         """xᵀAx of the block matrix A (held blocks' couplings left out), x (nb, ndof): the curvature a line
         search needs, without assembling A."""
         value = float(np.einsum("ni,nij,nj->", x, self.diag, x))
+        held = np.zeros(self.n_blocks, dtype=bool) if self.held is None else self.held
         for bi, bj, blocks, which in zip(self.pair_i, self.pair_j, self.pair_blocks, self.pair_which):
-            a, b, stack = (bi, bj, blocks) if which is None else (bi[which], bj[which], blocks[which])
-            if self.held is not None:
-                free = ~(self.held[a] | self.held[b])
-                if not np.all(free):  # else the stack as it is: no copy of its blocks
-                    a, b, stack = a[free], b[free], stack[free]
-            value += 2.0 * float(np.einsum("ni,nij,nj->", x[a], stack, x[b]))
+            index = np.arange(len(bi)) if which is None else np.asarray(which, dtype=np.int64)
+            value += 2.0 * _coupling_form(x, bi.astype(np.int64, copy=False), bj.astype(np.int64, copy=False),
+                                          blocks, index, held)
         return value
 
     def to_dense(self) -> np.ndarray:
@@ -375,6 +384,26 @@ class BlockSystem:
             return out.reshape(n, n)
         rows, cols, vals = self.triplets()
         return np.bincount(rows * n + cols, weights=vals, minlength=n * n).reshape(n, n)
+
+
+@njit(cache=True)
+def _coupling_form(x: np.ndarray, bi: np.ndarray, bj: np.ndarray, blocks: np.ndarray, index: np.ndarray,
+                   held: np.ndarray) -> float:
+    """Σ x[a]ᵀ·K·x[b] over the coupling blocks K = blocks[c] (a = bi[c], b = bj[c]) for c in ``index``, those of
+    held blocks left out: the stack read in place, where gathering the picked blocks copied it every solve."""
+    total = 0.0
+    for m in range(index.shape[0]):
+        c = index[m]
+        a = bi[c]
+        b = bj[c]
+        if held[a] or held[b]:
+            continue
+        for i in range(blocks.shape[1]):
+            row = 0.0
+            for j in range(blocks.shape[2]):
+                row += blocks[c, i, j] * x[b, j]
+            total += x[a, i] * row
+    return total
 
 
 @njit(cache=True)
