@@ -27,8 +27,8 @@ DeviceName = Literal["cpu", "gpu", "auto"]
 DEVICES: tuple[DeviceName, ...] = get_args(DeviceName)
 # solvers with a GPU backend: the block-Jacobi conjugate gradient, and ``auto``, whose large systems use it
 GPU_SOLVERS = ("auto", "cg-jacobi")
-# ``device = "auto"`` takes the GPU for models of at least this many blocks (provisional: the GPU's
-# speed against the CPU's is measured by benchmarks/gpu/check.sh, docs/gpu.md)
+# ``device = "auto"`` takes the GPU for models of at least this many blocks: from here on the GPU's steps are as
+# fast as a 16-core CPU's or faster, below slower (benchmarks/gpu/rows.sh on an H200, docs/gpu.md)
 GPU_MIN_BLOCKS = 10_000
 
 
