@@ -71,11 +71,12 @@ class ContactSprings:
 
     def increments(self, dd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """How the gaps (n,) and shear spring displacements (n, k) move with the solve's ``dd``:
-        the rows times Δd_a minus the rows times Δd_b, one compiled pass on all cores (for systems of more
-        than ``INCREMENTAL_BLOCKS`` blocks: its sums differ from the contact terms' einsums in the last bits)."""
+        the rows times Δd_a minus the rows times Δd_b, one compiled pass, on all cores for systems of more than
+        ``PARALLEL_BLOCKS`` blocks (its sums differ from the contact terms' einsums in the last bits)."""
         n, k, _ = self.shear_a.shape
         dn, ds = np.empty(n), np.empty((n, k))
-        _row_increments(self.block_a, self.block_b, self.normal_a, self.normal_b, self.shear_a, self.shear_b,
+        kernel = _row_increments_parallel if len(dd) > PARALLEL_BLOCKS else _row_increments
+        kernel(self.block_a, self.block_b, self.normal_a, self.normal_b, self.shear_a, self.shear_b,
                         np.ascontiguousarray(dd), dn, ds)
         return dn, ds
 
@@ -164,19 +165,35 @@ def _stacked_rows(index: np.ndarray, first: np.ndarray, more: np.ndarray, first_
                 out[m, 1 + r, i] = more_scale[m] * more[c, r, i]
 
 
-@njit(parallel=True, cache=True)
-def _row_increments(block_a: np.ndarray, block_b: np.ndarray, normal_a: np.ndarray, normal_b: np.ndarray,
-                    shear_a: np.ndarray, shear_b: np.ndarray, dd: np.ndarray, dn: np.ndarray, ds: np.ndarray) -> None:
-    """dn = normal_a·dd[a] - normal_b·dd[b] and ds likewise with the shear rows, contact by contact."""
-    n, k, ndof = shear_a.shape
-    for c in prange(n):
-        a, b = block_a[c], block_b[c]
+@njit(cache=True)
+def _row_increments_of(c: int, block_a: np.ndarray, block_b: np.ndarray, normal_a: np.ndarray, normal_b: np.ndarray,
+                       shear_a: np.ndarray, shear_b: np.ndarray, dd: np.ndarray, dn: np.ndarray, ds: np.ndarray) -> None:
+    """dn[c] = normal_a[c]·dd[a] - normal_b[c]·dd[b] and ds[c] likewise with the shear rows."""
+    _, k, ndof = shear_a.shape
+    a, b = block_a[c], block_b[c]
+    acc = 0.0
+    for i in range(ndof):
+        acc += normal_a[c, i] * dd[a, i] - normal_b[c, i] * dd[b, i]
+    dn[c] = acc
+    for r in range(k):
         acc = 0.0
         for i in range(ndof):
-            acc += normal_a[c, i] * dd[a, i] - normal_b[c, i] * dd[b, i]
-        dn[c] = acc
-        for r in range(k):
-            acc = 0.0
-            for i in range(ndof):
-                acc += shear_a[c, r, i] * dd[a, i] - shear_b[c, r, i] * dd[b, i]
-            ds[c, r] = acc
+            acc += shear_a[c, r, i] * dd[a, i] - shear_b[c, r, i] * dd[b, i]
+        ds[c, r] = acc
+
+
+@njit(cache=True)
+def _row_increments(block_a: np.ndarray, block_b: np.ndarray, normal_a: np.ndarray, normal_b: np.ndarray,
+                    shear_a: np.ndarray, shear_b: np.ndarray, dd: np.ndarray, dn: np.ndarray, ds: np.ndarray) -> None:
+    """:func:`_row_increments_of` every contact, on one thread (small models: starting the threads cost more)."""
+    for c in range(shear_a.shape[0]):
+        _row_increments_of(c, block_a, block_b, normal_a, normal_b, shear_a, shear_b, dd, dn, ds)
+
+
+@njit(parallel=True, cache=True)
+def _row_increments_parallel(block_a: np.ndarray, block_b: np.ndarray, normal_a: np.ndarray, normal_b: np.ndarray,
+                             shear_a: np.ndarray, shear_b: np.ndarray, dd: np.ndarray, dn: np.ndarray,
+                             ds: np.ndarray) -> None:
+    """:func:`_row_increments` with the contacts shared among threads (each contact's sums the same bits)."""
+    for c in prange(shear_a.shape[0]):
+        _row_increments_of(c, block_a, block_b, normal_a, normal_b, shear_a, shear_b, dd, dn, ds)
