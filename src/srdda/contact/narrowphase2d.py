@@ -58,7 +58,7 @@ FOUND_VERTEX, FOUND_EDGE, FOUND_KIND = range(3)
 FOUND_FIELDS = 3
 
 # the parallel narrow phase's share of work (directed candidate pairs) and the rows it makes room for per pair
-# (a brick against its neighbour finds 2-3; a chunk that finds more is found again on one thread)
+# (a brick's vertices against a neighbour find at most 2; a chunk that finds more is found again on one thread)
 CHUNK_PAIRS = 256
 CHUNK_ROOM = 4
 
