@@ -1,4 +1,5 @@
-"""The direct backends: LAPACK on the dense matrix, SuperLU, CHOLMOD and PARDISO (the package doc compares them).
+"""The direct backends: LAPACK on the dense matrix, SuperLU, block Cholesky, CHOLMOD and PARDISO (the package doc
+compares them).
 
 A system with constraint rows is solved by LU of the augmented matrix with pivoting (every backend here:
 Cholesky needs a definite matrix).
@@ -7,8 +8,9 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections import OrderedDict
 from collections.abc import Callable
-from typing import TYPE_CHECKING, TypeAlias
+from typing import TYPE_CHECKING, NamedTuple, TypeAlias
 
 import numpy as np
 import scipy.linalg as sla
@@ -17,12 +19,14 @@ import scipy.sparse.linalg as spla
 from threadpoolctl import threadpool_limits
 
 from ..assembly.system import BlockSystem
+from ._blockcholesky import BlockFactorPattern, factorize_blocks, solve_factored
 from ._registry import SolverError, check_finite, register_solver
 
 if TYPE_CHECKING:
     import pypardiso  # optional (srdda[pardiso]), imported where used; it ships no stubs
 
-__all__ = ["DenseSolver", "SuperLUSolver", "CholmodSolver", "PardisoSolver", "blas_threads_for_steps"]
+__all__ = ["DenseSolver", "SuperLUSolver", "BlockCholeskySolver", "CholmodSolver", "PardisoSolver",
+           "blas_threads_for_steps"]
 
 
 Matrix: TypeAlias = sp.csr_matrix  # what _Factorizing.matrix assembles
@@ -113,6 +117,12 @@ class SuperLUSolver(_Factorizing):
             raise SolverError(f"singular system: {exc}") from exc
 
 
+def block_keys(columns: np.ndarray, pointers: np.ndarray, n_blocks: int) -> np.ndarray:
+    """The keys row·n_blocks + column of a block-sparse matrix's blocks (its BSR ``indices`` and ``indptr``),
+    sorted if each row's columns are."""
+    return np.repeat(np.arange(n_blocks), np.diff(pointers)) * n_blocks + columns
+
+
 class _BlockPattern:
     """The block pattern that a symbolic analysis was made for, and the matrices of that pattern.
 
@@ -145,9 +155,7 @@ class _BlockPattern:
 
     @staticmethod
     def keys_of(matrix: sp.bsr_matrix) -> np.ndarray:
-        n_blocks = matrix.shape[0] // matrix.blocksize[0]
-        rows = np.repeat(np.arange(n_blocks), np.diff(matrix.indptr))
-        return rows * n_blocks + matrix.indices
+        return block_keys(matrix.indices, matrix.indptr, matrix.shape[0] // matrix.blocksize[0])
 
     def positions(self, keys: np.ndarray) -> np.ndarray | None:
         """Where the blocks ``keys`` sit in this pattern, or None if some are not in it."""
@@ -218,6 +226,72 @@ class _Analysing(_Exact):
             self.factorizations += 1
             self._last = (matrix, factor)
         return check_finite(factor(rhs))
+
+
+class _KeptFactor(NamedTuple):
+    """The last factorisation: its matrix's block pattern (bytes of its keys), blocks, and substitution."""
+
+    pattern: bytes
+    data: np.ndarray
+    substitute: Factor
+
+
+class BlockCholeskySolver(_Exact):
+    """Sparse Cholesky whose entries are the system's dense ndof×ndof blocks (``_blockcholesky``).
+
+    The ordering and symbolic factorisation are made for the matrix's own block pattern and kept for the
+    last ``KEPT`` patterns met (contacts that open and close make a step's patterns recur); the factor is kept
+    while the matrix is unchanged. Unlike the union that CHOLMOD and PARDISO analyse, a pattern's analysis
+    does not depend on the matrices solved before it, so a run resumed from a saved state repeats the
+    uninterrupted run bit for bit. Constrained systems go to SuperLU's LU with pivoting.
+    """
+
+    name = "block-cholesky"
+    KEPT = 16  # analyses kept (an ordering and symbolic factorisation: about 0.3 ms at 74 blocks, 1 ms at 273)
+
+    def __init__(self) -> None:
+        self.analyses = 0  # symbolic analyses made (benchmarks read them)
+        self.factorizations = 0
+        self._patterns: OrderedDict[bytes, BlockFactorPattern] = OrderedDict()
+        self._last: _KeptFactor | None = None
+        self._saddle = SuperLUSolver()
+
+    def _analysis(self, pattern: bytes, keys: np.ndarray, n_blocks: int) -> BlockFactorPattern:
+        kept = self._patterns.get(pattern)
+        if kept is None:
+            kept = self._patterns[pattern] = BlockFactorPattern(keys, n_blocks)
+            self.analyses += 1
+            if len(self._patterns) > self.KEPT:
+                self._patterns.popitem(last=False)
+        else:
+            self._patterns.move_to_end(pattern)
+        return kept
+
+    def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray:
+        if system.n_constraints:
+            return self._saddle.solve(system, rhs)
+        data, columns, pointers = system.block_rows()
+        keys = block_keys(columns, pointers, system.n_blocks)
+        pattern = keys.tobytes() + system.n_blocks.to_bytes(8, "little")
+        last = self._last
+        if last is not None and last.pattern == pattern and np.array_equal(last.data, data):
+            return check_finite(last.substitute(rhs))
+        symbolic = self._analysis(pattern, keys, system.n_blocks)
+        factor = np.zeros((symbolic.n_factor_blocks, system.ndof, system.ndof))
+        lower = symbolic.destination >= 0
+        factor[symbolic.destination[lower]] = data[lower]
+        failed = factorize_blocks(symbolic.pointers, symbolic.rows, factor)
+        if failed >= 0:
+            raise SolverError(f"the matrix is not positive definite (block {symbolic.order[failed]})")
+        self.factorizations += 1
+        ndof = system.ndof
+
+        def substitute(b: np.ndarray) -> np.ndarray:
+            blocks = b.reshape(-1, ndof)
+            return solve_factored(symbolic.pointers, symbolic.rows, factor, symbolic.order, blocks).ravel()
+
+        self._last = _KeptFactor(pattern, data.copy(), substitute)  # a copy: a caller may change its system in place
+        return check_finite(substitute(rhs))
 
 
 class CholmodSolver(_Analysing):
@@ -296,5 +370,6 @@ def blas_threads_for_steps() -> threadpool_limits:
 
 register_solver("dense", lambda tolerance: DenseSolver())
 register_solver("superlu", lambda tolerance: SuperLUSolver())
+register_solver("block-cholesky", lambda tolerance: BlockCholeskySolver())
 register_solver("cholmod", lambda tolerance: CholmodSolver(), requires="sksparse")
 register_solver("pardiso", lambda tolerance: PardisoSolver(), requires="pypardiso")

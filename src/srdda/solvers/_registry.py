@@ -112,7 +112,7 @@ def get_solver(name: str = "auto", tolerance: float = DEFAULT_TOLERANCE, device:
 
 def best_direct() -> LinearSolver:
     """The fastest installed direct backend for large systems (measured in docs/performance.md)."""
-    return get_solver(next(n for n in ("pardiso", "cholmod", "superlu") if n in available_solvers()))
+    return get_solver(next(n for n in ("pardiso", "cholmod", "block-cholesky") if n in available_solvers()))
 
 
 def check_finite(x: np.ndarray) -> np.ndarray:

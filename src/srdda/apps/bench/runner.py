@@ -192,7 +192,7 @@ class Probe:
         self._wrap(simulation, "get_solver", timed_solvers)
         for name in ("assemble", "base_system"):
             self._wrap(Stepper, name, timer("assembly"))
-        for name in ("to_bsr", "to_csr", "to_dense", "saddle_csr", "saddle_dense"):
+        for name in ("block_rows", "to_bsr", "to_csr", "to_dense", "saddle_csr", "saddle_dense"):
             self._wrap(BlockSystem, name, timer("assembly"))
         for name in ("converged", "commit"):
             self._wrap(ContactStep, name, timer("open_close"))
