@@ -108,6 +108,9 @@ def test_bench_quick_json_rows() -> None:
         assert min(shares) >= 0.0 and sum(shares) == pytest.approx(1.0, abs=1e-9)  # rounding of the sum
         assert r["peak_mb"] > 0
         assert (r["cg_iterations"], r["cg_iterations_per_solve"]) == (0, None)  # below 500 blocks: direct solves
+        # the block Cholesky: a factor a solve at most (one is reused where the matrix did not change), an
+        # ordering and analysis for each new block pattern, at most one a factorisation
+        assert 0 < r["analyses"] <= r["factorizations"] <= r["solves_total"]
         # two steps from rest: some blocks fall freely (ratio 1); open-close's contacts pull a few of them up to
         # 0.5 % further (12 of slope_a's blocks beyond the 0.1 % margin), a blow-up would take them many times
         assert isinstance(r["beyond_free_fall"], int) and 0.99 <= r["free_fall_ratio"] < 1.01

@@ -26,6 +26,9 @@ nothing is patched in the parent):
   ``cg_iterations_per_solve`` divides by the solves it made. With
   ``solves_per_step`` it tells whether a slow model pays for many solves or
   for slow ones;
+* ``factorizations``, ``analyses``: the direct backend's numerical factorisations and orderings with
+  symbolic analyses over the run (``auto``: those of its direct tier; a solve whose matrix is the last
+  one's reuses its factor). SuperLU orders at every factorisation and reports no analyses (None);
 * ``device``: where the conjugate gradient ran: "cpu", or the GPU's name (``--device gpu``,
   :mod:`srdda.backends`); ``gpu_peak_mb``: the high-water mark of CuPy's memory pool (the GPU memory
   the run's arrays took; None on the CPU); ``gpu_upload_mb``: what the solves moved to the GPU;
@@ -218,6 +221,14 @@ class _TimedSolver:
         return self._solve(system, rhs) if tolerance is None else self._solve(system, rhs, tolerance)
 
 
+def direct_work(solvers: list[Any]) -> tuple[int, int | None]:
+    """(factorisations, analyses) of the run's direct backends (``auto``: its direct tier); analyses None
+    where no backend counts them."""
+    direct = [getattr(solver, "direct", solver) for solver in solvers]
+    analyses = [s.analyses for s in direct if hasattr(s, "analyses")]
+    return sum(getattr(s, "factorizations", 0) for s in direct), sum(analyses) if analyses else None
+
+
 def cg_iterations(solver: Any) -> list[int]:
     """The iterations of each conjugate-gradient solve ``solver`` made (``auto``: its iterative backend)."""
     return list(getattr(getattr(solver, "iterative", solver), "iterations", []))
@@ -313,6 +324,7 @@ def measure(case: BenchCase, steps: int, method: MethodName, dt: float | None, t
         note = status
     n = len(probe.accepted_solves)
     iterations = [k for solver in probe.solvers for k in cg_iterations(solver)]
+    factorizations, analyses = direct_work(probe.solvers)
     row: dict[str, Any] = {
         "model": case.name, "dim": case.dim, "blocks": arrays.n_blocks, "method": settings.method,
         "contact_solver": settings.contact_solver, "steps": n,
@@ -325,6 +337,7 @@ def measure(case: BenchCase, steps: int, method: MethodName, dt: float | None, t
         "contacts_per_attempt": float(np.mean(probe.contacts)) if probe.contacts else 0.0,
         "cg_iterations": int(sum(iterations)),
         "cg_iterations_per_solve": float(np.mean(iterations)) if iterations else None,
+        "factorizations": factorizations, "analyses": analyses,
         "wall_s": wall, "cpu_s": cpu, "steps_per_cpu_s": n / cpu if cpu > 0 else 0.0, "build_s": build_s,
         "beyond_free_fall": beyond, "free_fall_ratio": ratio,
         "status": status, "note": note, **device_columns(probe.solvers),
