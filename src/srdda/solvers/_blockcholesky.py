@@ -4,11 +4,10 @@ A DDA step's matrix is block-sparse with dense 6×6 (2D) or 12×12 (3D) blocks,
 coupled only where contacts and springs join two blocks. Factorising it entry by
 entry (SuperLU, QDLDL) spends most of its time on index work and on orderings
 that it cannot keep; here the ordering and the symbolic factorisation are made
-on the graph of the blocks, once per block pattern (``_Analysing`` keeps them
-while later matrices' patterns lie inside), and the numerical factorisation is
-a left-looking Cholesky whose every operation is a small dense product, in one
-compiled pass. Measured against SuperLU in docs/performance.md, *Direct solves
-in blocks*.
+on the graph of the blocks, once per block pattern (``BlockCholeskySolver`` keeps
+the last ones), and the numerical factorisation is a left-looking Cholesky whose
+every operation is a small dense product, in one compiled pass. Measured
+against SuperLU in docs/performance.md, *Direct solves in blocks*.
 
 The fill-reducing ordering is SuperLU's multiple minimum degree on the block
 graph (a matrix of one entry per block), so no ordering is written here.
@@ -37,7 +36,7 @@ def minimum_degree_order(keys: np.ndarray, n_blocks: int) -> np.ndarray:
                            np.searchsorted(rows, np.arange(n_blocks + 1)).astype(np.int32)),
                           shape=(n_blocks, n_blocks))
     lu = spla.splu(graph, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-    return np.argsort(lu.perm_c)
+    return np.argsort(lu.perm_c)  # perm_c holds each block's new position (taken as the order: 4-8 × the fill)
 
 
 class BlockFactorPattern:
