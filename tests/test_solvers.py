@@ -151,9 +151,7 @@ def test_block_cholesky_pattern_holds_every_entry_of_the_factor(n_blocks, densit
     columns = np.repeat(np.arange(n_blocks), np.diff(symbolic.pointers))
     in_pattern[symbolic.rows, columns] = True
     assert not np.any(np.any(lower != 0.0, axis=(1, 3)) & ~in_pattern)
-    factor = np.zeros((symbolic.n_factor_blocks, ndof, ndof))
-    lower_blocks = symbolic.destination >= 0
-    factor[symbolic.destination[lower_blocks]] = bsr.data[lower_blocks]
+    factor = symbolic.placed(bsr.data)
     assert factorize_blocks(symbolic.pointers, symbolic.rows, factor) == -1
     expected = lower[symbolic.rows, :, columns, :]
     assert np.max(np.abs(factor - expected)) <= 1e-12 * np.max(np.abs(lower))

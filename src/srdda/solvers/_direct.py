@@ -277,9 +277,7 @@ class BlockCholeskySolver(_Exact):
         if last is not None and last.pattern == pattern and np.array_equal(last.data, data):
             return check_finite(last.substitute(rhs))
         symbolic = self._analysis(pattern, keys, system.n_blocks)
-        factor = np.zeros((symbolic.n_factor_blocks, system.ndof, system.ndof))
-        lower = symbolic.destination >= 0
-        factor[symbolic.destination[lower]] = data[lower]
+        factor = symbolic.placed(data)
         failed = factorize_blocks(symbolic.pointers, symbolic.rows, factor)
         if failed >= 0:
             raise SolverError(f"the matrix is not positive definite (block {symbolic.order[failed]})")
