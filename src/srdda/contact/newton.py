@@ -41,6 +41,8 @@ Newton's method with a line search on Π reaches it:
   updates cost more solves than they change, docs/dev/contact-solve.md);
   a contact new in the step sticks until a solve gave it a normal force
   (Shi: a contact that closes locks first);
+* the passes over the contacts at an iterate (the springs' forces and
+  potentials, their states) are compiled loops, one each;
 * with an iterative backend the solves are inexact while the active set
   still moves: while more than ``NEARLY_SETTLED`` of the contacts changed
   state at the last iterate, a solve stops at ``INEXACT_FORCING`` × the last
@@ -65,6 +67,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba import njit
 
 from ..assembly.system import BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
 from ..term import StepContext
@@ -97,6 +100,128 @@ def _units(vectors: np.ndarray) -> np.ndarray:
     return np.where(size[:, None] > 0.0, vectors / np.where(size > 0.0, size, 1.0)[:, None], 0.0)
 
 
+@njit(cache=True)
+def _norm(v: np.ndarray) -> float:
+    """|v| of one row (k = 1: its absolute value, as :func:`magnitudes`)."""
+    if v.shape[0] == 1:
+        return abs(v[0])
+    total = 0.0
+    for x in v:
+        total += x * x
+    return float(np.sqrt(total))
+
+
+@njit(cache=True)
+def _spring_forces(gap: np.ndarray, shear: np.ndarray, kn: np.ndarray, ks: np.ndarray, tension: np.ndarray,
+                   tau: np.ndarray, normal_on: np.ndarray, stick: np.ndarray, slip: np.ndarray,
+                   slip_direction: np.ndarray, tangent: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The springs' forces γ = ∂ψ/∂g (n,) and ∂ψ/∂s (n, k) at effective gaps and shears, of the true springs
+    and of the linear model (``normal_on``, ``stick``, ``slip``, ``slip_direction``, ``tangent``) the last solve
+    was assembled with, in one pass (impact laws apart: :meth:`NewtonContactStep._at_impacts`)."""
+    n, k = shear.shape
+    true_n, true_s = np.empty(n), np.empty((n, k))
+    model_n, model_s = np.empty(n), np.empty((n, k))
+    for c in range(n):
+        s = shear[c]
+        true_n[c] = min(kn[c] * gap[c], tension[c])
+        model_n[c] = kn[c] * gap[c] if normal_on[c] else tension[c]
+        trial = ks[c] * s
+        size = _norm(trial)
+        if size <= tau[c]:
+            true_s[c] = trial
+        else:
+            length = _norm(s)
+            for j in range(k):
+                true_s[c, j] = tau[c] * (s[j] / length) if length > 0.0 else 0.0
+        if stick[c]:
+            model_s[c] = trial
+        elif slip[c]:
+            d = slip_direction[c]
+            along = 0.0
+            for j in range(k):
+                along += s[j] * d[j]
+            for j in range(k):
+                model_s[c, j] = tau[c] * d[j] + tangent[c] * (s[j] - along * d[j])
+        else:
+            model_s[c] = 0.0
+    return true_n, true_s, model_n, model_s
+
+
+@njit(cache=True)
+def _spring_potentials(gap: np.ndarray, shear: np.ndarray, kn: np.ndarray, ks: np.ndarray, tension: np.ndarray,
+                       tau: np.ndarray, normal_on: np.ndarray, stick: np.ndarray, slip: np.ndarray,
+                       slip_direction: np.ndarray, tangent: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The springs' potentials ψ_n (n,) and ψ_s (n,) (up to constants) at effective gaps and shears, of the
+    true springs and of the linear model, in one pass (the integrals of :func:`_spring_forces`)."""
+    n, k = shear.shape
+    true_n, true_s = np.empty(n), np.empty(n)
+    model_n, model_s = np.empty(n), np.empty(n)
+    for c in range(n):
+        s, g = shear[c], gap[c]
+        if kn[c] * g > tension[c]:
+            true_n[c] = tension[c] * g - 0.5 * tension[c] ** 2 / kn[c]
+        else:
+            true_n[c] = 0.5 * kn[c] * g**2
+        model_n[c] = 0.5 * kn[c] * g**2 if normal_on[c] else tension[c] * g
+        size = _norm(s)
+        limit = tau[c] / ks[c]
+        true_s[c] = 0.5 * ks[c] * size**2 if size <= limit else tau[c] * size - 0.5 * tau[c] * limit
+        squared = 0.0
+        for j in range(k):
+            squared += s[j] * s[j]
+        if stick[c]:
+            model_s[c] = 0.5 * ks[c] * squared
+        elif slip[c]:
+            d = slip_direction[c]
+            along = 0.0
+            for j in range(k):
+                along += s[j] * d[j]
+            across = 0.0
+            for j in range(k):
+                x = s[j] - along * d[j]
+                across += x * x
+            model_s[c] = along * tau[c] + 0.5 * tangent[c] * across
+        else:
+            model_s[c] = 0.0
+    return true_n, true_s, model_n, model_s
+
+
+@njit(cache=True)
+def _states_at(gap: np.ndarray, shear: np.ndarray, true_n: np.ndarray, true_s: np.ndarray, model_n: np.ndarray,
+               model_s: np.ndarray, kn: np.ndarray, ks: np.ndarray, tension: np.ndarray, tau: np.ndarray,
+               friction: np.ndarray, cohesion: np.ndarray, normal_star: np.ndarray, limit: np.ndarray,
+               friction_tolerance: float, stiffer_normal: np.ndarray, stiffer_stick: np.ndarray,
+               normal_on: np.ndarray, stick: np.ndarray, flipping: np.ndarray, unsettled_friction: np.ndarray,
+               slip_direction: np.ndarray) -> None:
+    """The springs' true states at an iterate, in one pass (:meth:`NewtonContactStep.converged`): ``normal_on``
+    (compressed, or bonded within its tensile strength), ``stick`` (within the yield force; or either held by a
+    damped step's ``stiffer_*``), ``flipping`` (the true force differs from the model's by more than ``limit``),
+    ``unsettled_friction`` (friction acts, and a slipping contact's N* is off its normal force by more than the
+    tolerance, or a sticking one would slip at its normal force), and ŝ of the slipping ones."""
+    n, k = shear.shape
+    for c in range(n):
+        s = shear[c]
+        size = _norm(s)
+        trial = ks[c] * size
+        on = kn[c] * gap[c] < tension[c] or stiffer_normal[c]
+        sticks = trial <= tau[c] or stiffer_stick[c]
+        normal_on[c], stick[c] = on, sticks
+        difference = 0.0
+        for j in range(k):
+            x = true_s[c, j] - model_s[c, j]
+            difference += x * x
+        shear_change = abs(true_s[c, 0] - model_s[c, 0]) if k == 1 else np.sqrt(difference)
+        flipping[c] = abs(true_n[c] - model_n[c]) > limit[c] or shear_change > limit[c]
+        compression = max(-true_n[c], 0.0)
+        off = abs(compression - normal_star[c]) > max(friction_tolerance * compression, limit[c])
+        would_slip = trial > compression * friction[c] + cohesion[c] + limit[c]
+        unsettled_friction[c] = friction[c] > 0.0 and on and ((not sticks and off) or (sticks and would_slip))
+        for j in range(k):
+            slip_direction[c, j] = 0.0 if sticks or size == 0.0 else s[j] / size
+
+
 class NewtonContactStep(ContactStep):
     """The contacts of one step attempt as one complementarity problem (module doc)."""
 
@@ -116,6 +241,7 @@ class NewtonContactStep(ContactStep):
         # a contact new in this step has no normal force yet: it sticks until a solve gave it one (Shi: a
         # contact that closes locks first)
         self.known = known.copy()
+        self._tau = self._yield_forces()
         self.slip_direction = direction.copy()  # ŝ of the slipping contacts' linear model
         self.slip_shear = self.shear0.copy()  # the effective shear the slipping contacts' tangent was taken at
         self.model_tangent = np.zeros(len(state))  # the slipping springs' stiffness across ŝ in the last model
@@ -134,26 +260,31 @@ class NewtonContactStep(ContactStep):
     # -- the contact model ---------------------------------------------------
     def yield_force(self) -> np.ndarray:
         """τ (n,) of the shear springs: tan φ·N* + c·A (Tresca); unbounded while N* is not known."""
+        return self._tau
+
+    def _yield_forces(self) -> np.ndarray:
+        """τ (n,) at the present N* (kept until N* or the known normal forces change: every pass reads it)."""
         return np.where(self.known, self.response.strength(np.maximum(self.normal_star, 0.0)), UNBOUNDED)
 
-    def _forces(self, gap: np.ndarray, shear: np.ndarray, model: bool) -> tuple[np.ndarray, np.ndarray]:
-        """The springs' forces (γ_n (n,), γ_s (n, k): ∂ψ/∂g, ∂ψ/∂s) at effective gaps and shears, of the
-        true functions or (``model``) of the linear model the last solve was assembled with."""
-        kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
-        tau = self.yield_force()
-        tension = self.response.tension
-        if model:
-            normal = self._at_impacts(np.where(self.normal_on, kn * gap, tension), gap, model, potential=False)
-            sliding = self.slip[:, None]
-            tangent = self.model_tangent[:, None] * self._across(shear)
-            shear_force = np.where(self.stick[:, None], ks[:, None] * shear,
-                                   np.where(sliding, tau[:, None] * self.slip_direction + tangent, 0.0))
-            return normal, shear_force
-        normal = self._at_impacts(np.minimum(kn * gap, tension), gap, model, potential=False)
-        trial = ks[:, None] * shear
-        size = magnitudes(trial)
-        within = size <= tau
-        return normal, np.where(within[:, None], trial, tau[:, None] * _units(shear))
+    def hold_normal_force(self, normal_star: np.ndarray) -> None:
+        """Hold the yield forces' N* at ``normal_star`` (n,) for the whole step: the Tresca problem alone."""
+        self.follow_normal_force = False
+        self.known[:] = True
+        self.normal_star = normal_star
+        self._tau = self._yield_forces()
+
+    def _model(self) -> tuple[np.ndarray, ...]:
+        """The springs and the linear model of the last solve, as the compiled passes take them."""
+        r = self.response
+        return (r.normal_stiffness, r.shear_stiffness, r.tension, self._tau, self.normal_on, self.stick, self.slip,
+                self.slip_direction, self.model_tangent)
+
+    def _forces(self, gap: np.ndarray, shear: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The springs' forces γ_n (n,), γ_s (n, k) (∂ψ/∂g, ∂ψ/∂s) at effective gaps and shears: of the true
+        functions, then of the linear model the last solve was assembled with."""
+        true_n, true_s, model_n, model_s = _spring_forces(gap, np.ascontiguousarray(shear), *self._model())
+        return (self._at_impacts(true_n, gap, False, potential=False), true_s,
+                self._at_impacts(model_n, gap, True, potential=False), model_s)
 
     def _at_impacts(self, normal: np.ndarray, gap: np.ndarray, model: bool, potential: bool) -> np.ndarray:
         """The normal springs' forces γ_n (or, ``potential``, their ψ_n) (n,) with the contacts of a restitution
@@ -185,11 +316,6 @@ class NewtonContactStep(ContactStep):
         turning = self.slip & (size > 0.0) & np.any(self.slip_direction != 0.0, axis=1)
         return np.where(turning, np.minimum(tau / np.where(size > 0.0, size, 1.0),
                                             self.response.shear_stiffness), 0.0)
-
-    def _across(self, shear: np.ndarray) -> np.ndarray:
-        """(I − ŝŝᵀ)s: the part of the shears across the slip directions of the linear model."""
-        along = np.einsum("nk,nk->n", shear, self.slip_direction)
-        return shear - along[:, None] * self.slip_direction
 
     # -- a solve -------------------------------------------------------------
     def _increments(self, dd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -246,26 +372,12 @@ class NewtonContactStep(ContactStep):
         self._loose = tolerance > tight
         return tolerance
 
-    def _potentials(self, gap: np.ndarray, shear: np.ndarray, model: bool) -> float:
-        """Σ ψ of the springs at effective gaps and shears (up to a constant), of the true functions or of the
+    def _potentials(self, gap: np.ndarray, shear: np.ndarray) -> tuple[float, float]:
+        """Σ ψ of the springs at effective gaps and shears (up to a constant): of the true functions, and of the
         linear model the last solve was assembled with (the integrals of :meth:`_forces`)."""
-        kn, ks, tension = self.response.normal_stiffness, self.response.shear_stiffness, self.response.tension
-        tau = self.yield_force()
-        if model:
-            normal = np.where(self.normal_on, 0.5 * kn * gap**2, tension * gap)
-            across = self._across(shear)
-            slip = np.einsum("nk,nk->n", shear, self.slip_direction) * tau \
-                + 0.5 * self.model_tangent * np.einsum("nk,nk->n", across, across)
-            shear_energy = np.where(self.stick, 0.5 * ks * np.einsum("nk,nk->n", shear, shear),
-                                    np.where(self.slip, slip, 0.0))
-            return float(np.sum(self._at_impacts(normal, gap, model, potential=True)) + np.sum(shear_energy))
-        capped = kn * gap > tension
-        normal = self._at_impacts(np.where(capped, tension * gap - 0.5 * tension**2 / kn, 0.5 * kn * gap**2),
-                                  gap, model, potential=True)
-        size = magnitudes(shear)
-        limit = tau / ks
-        shear_energy = np.where(size <= limit, 0.5 * ks * size**2, tau * size - 0.5 * tau * limit)
-        return float(np.sum(normal) + np.sum(shear_energy))
+        true_n, true_s, model_n, model_s = _spring_potentials(gap, np.ascontiguousarray(shear), *self._model())
+        return (float(np.sum(self._at_impacts(true_n, gap, False, potential=True)) + np.sum(true_s)),
+                float(np.sum(self._at_impacts(model_n, gap, True, potential=True)) + np.sum(model_s)))
 
     def step_length(self, dd_before: np.ndarray, delta: np.ndarray, curvature: Callable[[], float]) -> float:
         """α in (0, 1] along Δd_k + α·δ that decreases Π enough (Armijo, backtracking); ``curvature()`` gives
@@ -279,12 +391,11 @@ class NewtonContactStep(ContactStep):
             return gap_k + c_p * (dn0 + alpha * dn), shear_k + c_p * (ds0 + alpha * ds)
 
         gap0, shear0 = along(0.0)
-        true_n, true_s = self._forces(gap0, shear0, model=False)
-        lin_n, lin_s = self._forces(gap0, shear0, model=True)
+        true_n, true_s, lin_n, lin_s = self._forces(gap0, shear0)
         c = curvature()
         slope0 = -c + float(np.dot(true_n - lin_n, dn) + np.sum((true_s - lin_s) * ds))
         alpha = 1.0
-        true0, model0 = self._potentials(gap0, shear0, False), self._potentials(gap0, shear0, True)
+        true0, model0 = self._potentials(gap0, shear0)
         # below the rounding of Π's contact parts no line search can tell values apart: the full step is taken
         resolution = ROUNDING * (abs(true0) + abs(model0)) / c_p
         resolvable, resolvable_rise = -slope0 > resolution, slope0 > resolution
@@ -293,7 +404,8 @@ class NewtonContactStep(ContactStep):
 
             def rise(alpha: float) -> float:  # Π(α) − Π(0)
                 gap, shear = along(alpha)
-                contacts = self._potentials(gap, shear, False) - self._potentials(gap, shear, True) - base
+                true, model = self._potentials(gap, shear)
+                contacts = true - model - base
                 return (0.5 * alpha**2 - alpha) * c + contacts / c_p
 
             value = rise(alpha)
@@ -371,54 +483,53 @@ class NewtonContactStep(ContactStep):
         gap, shear = self._at_alpha_point(c_p)
         kn, ks = self.response.normal_stiffness, self.response.shear_stiffness
         # where the true springs' forces differ from the model's by more than the negligible force, another solve
-        true_n, true_s = self._forces(gap, shear, model=False)
-        model_n, model_s = self._forces(gap, shear, model=True)
+        true_n, true_s, model_n, model_s = self._forces(gap, shear)
         compression = np.maximum(-true_n, 0.0)
         self._force_limit = negligible_force(ctx.arrays.block_mass, ctx.arrays.gravity, r.block_a, r.block_b,
                                              compression, max(p.force_tolerance, FORCE_FLOOR))
         # a bonded contact carries tension up to its tensile strength (beyond, that force), a sliding one the
         # cohesion: both perfectly plastic within the step, so that the step's problem stays convex; the bond
         # then breaks when the step is committed (ContactLaw.keeps_bond)
-        tau = self.yield_force()
-        trial = ks * magnitudes(shear)
-        normal_on = kn * gap < self.response.tension
-        stick = trial <= tau
-        if self._stiffer is not None:
-            normal_on, stick = normal_on | self._stiffer[0], stick | self._stiffer[1]
-            self._stiffer = None
-        slip = ~stick
-        changed_normal = np.abs(true_n - model_n) > self._force_limit
-        changed_shear = magnitudes(true_s - model_s) > self._force_limit
+        n, k = shear.shape
+        normal_on, stick, flipping = np.empty(n, dtype=bool), np.empty(n, dtype=bool), np.empty(n, dtype=bool)
+        unsettled_friction, slip_direction = np.empty(n, dtype=bool), np.empty((n, k))
+        held = self._stiffer if self._stiffer is not None else (np.zeros(n, dtype=bool),) * 2
+        self._stiffer = None
+        response = self.response
+        _states_at(gap, np.ascontiguousarray(shear), true_n, true_s, model_n, model_s, kn, ks, response.tension,
+                   self._tau, response.friction, response.cohesion, self.normal_star, self._force_limit,
+                   p.friction_tolerance, held[0], held[1], normal_on, stick, flipping, unsettled_friction,
+                   slip_direction)
+        unsettled_friction &= self.follow_normal_force and self.normal_updates < NORMAL_UPDATES
         full_step = not self.step_lengths or self.step_lengths[-1] == 1.0
-        flipping = changed_normal | changed_shear
         last = np.zeros_like(dd) if self._last_iterate is None else self._last_iterate
         self._change = float(np.max(np.abs(dd - last), initial=0.0))
         self._last_iterate = dd.copy()
-        self._unsettled = int(np.sum(flipping)) > NEARLY_SETTLED * len(gap)
-        settled_states = full_step and not np.any(flipping)
+        flips = int(np.count_nonzero(flipping))
+        self._unsettled = flips > NEARLY_SETTLED * n
+        settled_states = full_step and flips == 0
         # Tresca: the yield forces' N* stay fixed while the active set settles (each such problem is convex, the
-        # line search on its Π converges), then follow the solved normal forces until these settle too
-        acts = (self.response.friction > 0.0) & normal_on
-        off = np.abs(compression - self.normal_star) > np.maximum(p.friction_tolerance * compression,
-                                                                  self._force_limit)
-        would_slip = trial > self.response.strength(compression) + self._force_limit
-        unsettled_friction = acts & ((slip & off) | (stick & would_slip)) & self.follow_normal_force \
-            & (self.normal_updates < NORMAL_UPDATES)
-        # a contact new in the step stuck at an unbounded yield force in this solve (frictionless ones too):
+        # line search on its Π converges), then follow the solved normal forces until these settle too.
+        # A contact new in the step stuck at an unbounded yield force in this solve (frictionless ones too):
         # the step is done only after a solve with every yield force from a normal force
-        done = settled_states and not np.any(unsettled_friction) and bool(np.all(self.known))
+        all_known = bool(np.all(self.known))
+        done = settled_states and not np.any(unsettled_friction) and all_known
         changed = flipping | (unsettled_friction if settled_states else False)
         self.unsettled_pairs = np.column_stack([r.block_a[changed], r.block_b[changed]])
-        self.normal_on, self.stick, self.slip = normal_on, stick, slip
-        self.slip_direction = np.where(slip[:, None], _units(shear), 0.0)
+        self.normal_on, self.stick, self.slip = normal_on, stick, ~stick
+        self.slip_direction = slip_direction
         # N* follows once the active set has nearly settled: the last few contacts' changes hardly move the
         # normal forces, and waiting for them would restart the settling after them
-        nearly_settled = full_step and int(np.sum(flipping)) <= NEARLY_SETTLED * len(gap)
+        nearly_settled = full_step and flips <= NEARLY_SETTLED * n
         update = settled_states or (nearly_settled and self.normal_updates < NORMAL_UPDATES)
-        if self.follow_normal_force and not done and (update or not np.all(self.known)):
+        if self.follow_normal_force and not done and (update or not all_known):
             self.normal_updates += bool(update)
             self.normal_star = compression
-        self.known[:] = True
+            self.known[:] = True
+            self._tau = self._yield_forces()
+        elif not all_known:
+            self.known[:] = True
+            self._tau = self._yield_forces()
         self.normal_force = -true_n
         if self.impacts is not None:  # the next solve linearises the impact law at this iterate
             self.impacts.at = gap[self.impacts.index].copy()
@@ -499,7 +610,7 @@ class NewtonContactStep(ContactStep):
         dn, ds = self._increments(dd)
         gap = self.start_gap(c_p) + c_p * dn
         shear = self.shear0 + c_p * ds
-        normal, shear_force = self._forces(gap, shear, model=False)
+        normal, shear_force, _, _ = self._forces(gap, shear)
         springs = -float(np.dot(normal, dn)) - float(np.sum(shear_force * ds))
         end = self.shear0 + ds
         plastic = magnitudes(end - self.elastic_shear(end))

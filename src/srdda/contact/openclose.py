@@ -197,10 +197,24 @@ def negligible_force(block_mass: np.ndarray, gravity: np.ndarray, block_a: np.nd
     smaller of its two blocks' (a light block beside heavy ones keeps a fine
     tolerance; a fixed base never sets it).
     """
-    scale = block_mass * float(np.linalg.norm(gravity))
-    np.maximum.at(scale, block_a, normal)
-    np.maximum.at(scale, block_b, normal)
-    return tolerance * np.minimum(scale[block_a], scale[block_b])
+    out = np.empty(len(normal))
+    _pair_force_scale(block_mass * float(np.linalg.norm(gravity)), block_a, block_b, normal, out)
+    return tolerance * out
+
+
+@njit(cache=True)
+def _pair_force_scale(scale: np.ndarray, block_a: np.ndarray, block_b: np.ndarray, normal: np.ndarray,
+                      out: np.ndarray) -> None:
+    """out[c]: the smaller of contact c's two blocks' force scales, each the larger of ``scale`` (the block's
+    weight, overwritten) and its contacts' ``normal`` (np.maximum's rule: a NaN wins)."""
+    for c in range(len(normal)):
+        value = normal[c]
+        for block in (block_a[c], block_b[c]):
+            if value > scale[block] or value != value:
+                scale[block] = value
+    for c in range(len(normal)):
+        a, b = scale[block_a[c]], scale[block_b[c]]
+        out[c] = a if a <= b or a != a else b
 
 
 def negligible_changes(state: np.ndarray, new_state: np.ndarray, normal: np.ndarray, shear_force: np.ndarray,

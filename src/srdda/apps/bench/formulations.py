@@ -45,9 +45,7 @@ class _HeldTresca(NewtonContactModel):
     def start(self, *args: Any) -> NewtonContactStep:
         step = super().start(*args)
         assert isinstance(step, NewtonContactStep)
-        step.follow_normal_force = False
-        step.known[:] = True
-        step.normal_star = self.normal_star(len(step))
+        step.hold_normal_force(self.normal_star(len(step)))
         return step
 
 
