@@ -5,7 +5,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import scipy.sparse.linalg as spla
@@ -124,6 +124,9 @@ def _random_block_system(n_blocks: int, ndof: int, n_pairs: int, seed: int) -> B
     return system
 
 
+# no deadline: the first example of each block size compiles its kernels (seconds on a fresh clone), which is
+# not what these tests measure
+@settings(deadline=None)
 @given(n_blocks=st.integers(1, 40), ndof=st.sampled_from([6, 12]), density=st.floats(0.0, 3.0),
        seed=st.integers(0, 2**32 - 1))
 def test_block_cholesky_solves_random_block_systems(n_blocks, ndof, density, seed):
@@ -135,6 +138,7 @@ def test_block_cholesky_solves_random_block_systems(n_blocks, ndof, density, see
     assert np.max(np.abs(x - expected)) <= 1e-12 * np.max(np.abs(expected))
 
 
+@settings(deadline=None)  # as above
 @given(n_blocks=st.integers(2, 30), density=st.floats(0.5, 3.0), seed=st.integers(0, 2**32 - 1))
 def test_block_cholesky_pattern_holds_every_entry_of_the_factor(n_blocks, density, seed):
     # the symbolic factorisation (elimination tree, fill-in) against the dense Cholesky of the matrix in the
