@@ -142,13 +142,15 @@ def _destinations(new_row: np.ndarray, new_col: np.ndarray, pointers: np.ndarray
     return out
 
 
-def _factorization(d: int) -> Callable[[np.ndarray, np.ndarray, np.ndarray], int]:
-    """The left-looking block Cholesky of :func:`factorize_blocks` compiled for blocks of d × d (d a constant
-    of the compiled code: the loops over a block have known lengths and vectorise; on slope_b's 6 × 6 blocks
-    0.78 against 1.37 ms a factorisation, the same bits)."""
+def _factorization(size: int) -> Callable[[np.ndarray, np.ndarray, np.ndarray], int]:
+    """The left-looking block Cholesky of :func:`factorize_blocks` compiled for blocks of ``size`` × ``size``
+    (a constant of the compiled code: the loops over a block have known lengths and vectorise), or, for
+    ``size`` 0, for blocks of any size read from the factor. The same operations in the same order: the
+    same bits."""
 
     @njit(cache=True)
     def factorize(pointers: np.ndarray, rows: np.ndarray, factor: np.ndarray) -> int:
+        d = size if size > 0 else factor.shape[1]
         n_blocks = len(pointers) - 1
         where = np.empty(n_blocks, dtype=np.int64)  # position of row i in the current column
         following = np.empty(n_blocks, dtype=np.int64)  # per done column k: the position of its next row to apply
@@ -210,7 +212,10 @@ def _factorization(d: int) -> Callable[[np.ndarray, np.ndarray, np.ndarray], int
     return factorize
 
 
-_FACTORIZATIONS: dict[int, Callable[[np.ndarray, np.ndarray, np.ndarray], int]] = {}  # by block size d
+# blocks of up to this many unknowns a side are factorised by code compiled for their size (6 × 6: 0.98 → 0.61 ms
+# on slope_b's matrices); larger ones by code that reads it (12 × 12 ran 11 % slower compiled for its size)
+SIZED_FACTORIZATION = 8
+_FACTORIZATIONS: dict[int, Callable[[np.ndarray, np.ndarray, np.ndarray], int]] = {}  # by block size, 0: any
 
 
 def factorize_blocks(pointers: np.ndarray, rows: np.ndarray, factor: np.ndarray) -> int:
@@ -219,19 +224,29 @@ def factorize_blocks(pointers: np.ndarray, rows: np.ndarray, factor: np.ndarray)
 
     Returns −1, or the first block column whose diagonal block is not positive definite.
     """
-    d = factor.shape[1]
-    if d not in _FACTORIZATIONS:
-        _FACTORIZATIONS[d] = _factorization(d)
-    return _FACTORIZATIONS[d](pointers, rows, factor)
+    size = factor.shape[1] if factor.shape[1] <= SIZED_FACTORIZATION else 0
+    if size not in _FACTORIZATIONS:
+        _FACTORIZATIONS[size] = _factorization(size)
+    return _FACTORIZATIONS[size](pointers, rows, factor)
 
 
 def _substitution(d: int) -> Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
-    """The substitutions of :func:`solve_factored` compiled for blocks of d × d (as :func:`_factorization`; one
-    function without calls to other compiled closures, whose on-disk cache would miss in every process)."""
+    """The substitutions of :func:`solve_factored` compiled for blocks of d × d (as :func:`_factorization`; its
+    block product an inner function, not another compiled closure, whose on-disk cache would miss in every
+    process)."""
 
     @njit(cache=True)
     def solve(pointers: np.ndarray, rows: np.ndarray, factor: np.ndarray, order: np.ndarray,
               rhs: np.ndarray) -> np.ndarray:
+
+        def subtract_product(block: np.ndarray, x: np.ndarray, out: np.ndarray, transposed: bool) -> None:
+            """out −= block·x, or blockᵀ·x if ``transposed`` (an inner function: compiled into ``solve``)."""
+            for a in range(d):
+                s = 0.0
+                for c in range(d):
+                    s += (block[c, a] if transposed else block[a, c]) * x[c]
+                out[a] -= s
+
         n_blocks = len(pointers) - 1
         y = np.empty((n_blocks, d))
         for k in range(n_blocks):
@@ -244,20 +259,10 @@ def _substitution(d: int) -> Callable[[np.ndarray, np.ndarray, np.ndarray, np.nd
                     s -= diag[a, c] * y[j, c]
                 y[j, a] = s / diag[a, a]
             for q in range(pointers[j] + 1, pointers[j + 1]):  # y_i −= L_ij·z_j below the diagonal
-                block, i = factor[q], rows[q]
-                for a in range(d):
-                    s = 0.0
-                    for c in range(d):
-                        s += block[a, c] * y[j, c]
-                    y[i, a] -= s
+                subtract_product(factor[q], y[j], y[rows[q]], False)
         for j in range(n_blocks - 1, -1, -1):  # Lᵀ·x = z
             for q in range(pointers[j] + 1, pointers[j + 1]):  # x_j −= L_ijᵀ·x_i
-                block, i = factor[q], rows[q]
-                for a in range(d):
-                    s = 0.0
-                    for c in range(d):
-                        s += block[c, a] * y[i, c]
-                    y[j, a] -= s
+                subtract_product(factor[q], y[rows[q]], y[j], True)
             diag = factor[pointers[j]]
             for a in range(d - 1, -1, -1):
                 s = y[j, a]
