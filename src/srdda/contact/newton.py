@@ -101,6 +101,17 @@ def _units(vectors: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
+def _distance(u: np.ndarray, v: np.ndarray) -> float:
+    """|u − v| of two rows (k = 1: the absolute value, as :func:`magnitudes`)."""
+    if u.shape[0] == 1:
+        return abs(u[0] - v[0])
+    total = 0.0
+    for j in range(u.shape[0]):
+        total += (u[j] - v[j]) ** 2
+    return float(np.sqrt(total))
+
+
+@njit(cache=True)
 def _norm(v: np.ndarray) -> float:
     """|v| of one row (k = 1: its absolute value, as :func:`magnitudes`)."""
     if v.shape[0] == 1:
@@ -208,12 +219,7 @@ def _states_at(gap: np.ndarray, shear: np.ndarray, true_n: np.ndarray, true_s: n
         on = kn[c] * gap[c] < tension[c] or stiffer_normal[c]
         sticks = trial <= tau[c] or stiffer_stick[c]
         normal_on[c], stick[c] = on, sticks
-        difference = 0.0
-        for j in range(k):
-            x = true_s[c, j] - model_s[c, j]
-            difference += x * x
-        shear_change = abs(true_s[c, 0] - model_s[c, 0]) if k == 1 else np.sqrt(difference)
-        flipping[c] = abs(true_n[c] - model_n[c]) > limit[c] or shear_change > limit[c]
+        flipping[c] = abs(true_n[c] - model_n[c]) > limit[c] or _distance(true_s[c], model_s[c]) > limit[c]
         compression = max(-true_n[c], 0.0)
         off = abs(compression - normal_star[c]) > max(friction_tolerance * compression, limit[c])
         would_slip = trial > compression * friction[c] + cohesion[c] + limit[c]
@@ -522,12 +528,11 @@ class NewtonContactStep(ContactStep):
         # normal forces, and waiting for them would restart the settling after them
         nearly_settled = full_step and flips <= NEARLY_SETTLED * n
         update = settled_states or (nearly_settled and self.normal_updates < NORMAL_UPDATES)
-        if self.follow_normal_force and not done and (update or not all_known):
+        follows = self.follow_normal_force and not done and (update or not all_known)
+        if follows:
             self.normal_updates += bool(update)
             self.normal_star = compression
-            self.known[:] = True
-            self._tau = self._yield_forces()
-        elif not all_known:
+        if follows or not all_known:  # the yield forces change with N* or with the contacts that gained one
             self.known[:] = True
             self._tau = self._yield_forces()
         self.normal_force = -true_n
