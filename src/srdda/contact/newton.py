@@ -35,16 +35,19 @@ Newton's method with a line search on Π reaches it:
   the full step already, and sticks the shear springs whose shear passes
   through their elastic range on the way (a slip that turns back);
 * N* of the yield forces stays fixed while the active set settles (each
-  such problem is convex), then, once at most 1 % of the contacts still
-  change state (``NEARLY_SETTLED``), follows the solved normal forces once
-  (``NORMAL_UPDATES``: each update restarts the active set's settling; more
-  updates cost more solves than they change, docs/dev/contact-solve.md);
+  such problem is convex), then, once at most 5 % of the contacts still
+  change state (``NEARLY_SETTLED``), follows the solved normal forces: once,
+  and again while the Tresca lag Σ|N − N*| / ΣN over the contacts whose
+  friction is at its strength (or would be) exceeds ``friction_tolerance``,
+  ``NORMAL_UPDATES`` times at most (each update restarts the active set's
+  settling; a single update left lags of 9-13 % in the first steps of the
+  3D slope and the brick wall, docs/dev/contact-solve.md);
   a contact new in the step sticks until a solve gave it a normal force
   (Shi: a contact that closes locks first);
 * the passes over the contacts at an iterate (the springs' forces and
   potentials, their states) are compiled loops, one each;
 * with an iterative backend the solves are inexact while the active set
-  still moves: while more than ``NEARLY_SETTLED`` of the contacts changed
+  still moves: while more than ``MOVING`` (1 %) of the contacts changed
   state at the last iterate, a solve stops at ``INEXACT_FORCING`` × the last
   iterate's largest change instead of the run's ``solver_tolerance`` (the
   next model differs anyway), and the step ends with a solve at that
@@ -52,9 +55,10 @@ Newton's method with a line search on Π reaches it:
   progress instead of the residual's);
 * it has converged when the full step was taken, every contact's yield
   force came from a normal force, no contact changed state by more than the
-  negligible force, and, until N* was updated ``NORMAL_UPDATES`` times, no
+  negligible force, and, unless N* was updated ``NORMAL_UPDATES`` times, no
   sliding contact's normal force (nor a sticking one's strength) moved by
-  more than ``friction_tolerance``.
+  more than ``friction_tolerance`` (before the first update) or the Tresca
+  lag is within it (after).
 
 A bonded contact carries tension up to its tensile strength and, sliding, its
 cohesion, both perfectly plastic within the step (so the problem stays
@@ -85,10 +89,11 @@ UNBOUNDED = 1e100  # N: the yield force of a contact whose normal force no solve
 ARMIJO = 1e-4  # a step must decrease Π by this fraction of what its slope at the start promises (Armijo)
 MIN_STEP = 1e-6  # the backtracking stops at this step length
 FORCE_FLOOR = 1e-9  # the iteration's force tolerance (× the blocks' force scale) when the run's is below: rounding
-NORMAL_UPDATES = 1  # the Tresca fixed point's updates of N* after the first problem settled; then N* is held
-NEARLY_SETTLED = 0.01  # N* is updated once no more than this fraction of the contacts still changes state
-# while more than NEARLY_SETTLED of the contacts changed state at the last iterate, an iterative backend solves
-# to this fraction of the last iterate's largest change (inexact Newton, docs/contacts/solve.md)
+NORMAL_UPDATES = 3  # the Tresca fixed point's updates of N* at most (the issue's 1-3 outer updates); then N* is held
+NEARLY_SETTLED = 0.05  # N* is updated once no more than this fraction of the contacts still changes state
+# while more than MOVING of the contacts changed state at the last iterate, an iterative backend solves to
+# INEXACT_FORCING of the last iterate's largest change (inexact Newton, docs/contacts/solve.md)
+MOVING = 0.01
 INEXACT_FORCING = 0.3
 KINK_PASS = 1e-6  # a damped step goes this fraction past the first kink of Π along the Newton direction
 ROUNDING = 64 * np.finfo(float).eps  # relative rounding of Π's sums over contacts: decreases below it are noise
@@ -205,7 +210,7 @@ def _states_at(gap: np.ndarray, shear: np.ndarray, true_n: np.ndarray, true_s: n
                friction: np.ndarray, cohesion: np.ndarray, normal_star: np.ndarray, limit: np.ndarray,
                friction_tolerance: float, stiffer_normal: np.ndarray, stiffer_stick: np.ndarray,
                normal_on: np.ndarray, stick: np.ndarray, flipping: np.ndarray, unsettled_friction: np.ndarray,
-               slip_direction: np.ndarray) -> None:
+               friction_limited: np.ndarray, slip_direction: np.ndarray) -> None:
     """The springs' true states at an iterate, in one pass (:meth:`NewtonContactStep.converged`): ``normal_on``
     (compressed, or bonded within its tensile strength), ``stick`` (within the yield force; or either held by a
     damped step's ``stiffer_*``), ``flipping`` (the true force differs from the model's by more than ``limit``),
@@ -224,6 +229,7 @@ def _states_at(gap: np.ndarray, shear: np.ndarray, true_n: np.ndarray, true_s: n
         off = abs(compression - normal_star[c]) > max(friction_tolerance * compression, limit[c])
         would_slip = trial > compression * friction[c] + cohesion[c] + limit[c]
         unsettled_friction[c] = friction[c] > 0.0 and on and ((not sticks and off) or (sticks and would_slip))
+        friction_limited[c] = friction[c] > 0.0 and on and (not sticks or would_slip)
         for j in range(k):
             slip_direction[c, j] = 0.0 if sticks or size == 0.0 else s[j] / size
 
@@ -372,7 +378,7 @@ class NewtonContactStep(ContactStep):
 
     def solve_tolerance(self, tight: float) -> float:
         """The next solve's displacement tolerance for an iterative backend: ``tight`` once at most
-        ``NEARLY_SETTLED`` of the contacts changed state at the last iterate, else ``INEXACT_FORCING`` × the
+        ``MOVING`` of the contacts changed state at the last iterate, else ``INEXACT_FORCING`` × the
         last iterate's largest change (the active set is still moving, so a tighter solve buys nothing)."""
         tolerance = max(tight, INEXACT_FORCING * self._change) if self._unsettled else tight
         self._loose = tolerance > tight
@@ -499,35 +505,44 @@ class NewtonContactStep(ContactStep):
         n, k = shear.shape
         normal_on, stick, flipping = np.empty(n, dtype=bool), np.empty(n, dtype=bool), np.empty(n, dtype=bool)
         unsettled_friction, slip_direction = np.empty(n, dtype=bool), np.empty((n, k))
+        friction_limited = np.empty(n, dtype=bool)
         held = self._stiffer if self._stiffer is not None else (np.zeros(n, dtype=bool),) * 2
         self._stiffer = None
         response = self.response
         _states_at(gap, np.ascontiguousarray(shear), true_n, true_s, model_n, model_s, kn, ks, response.tension,
                    self._tau, response.friction, response.cohesion, self.normal_star, self._force_limit,
                    p.friction_tolerance, held[0], held[1], normal_on, stick, flipping, unsettled_friction,
-                   slip_direction)
-        unsettled_friction &= self.follow_normal_force and self.normal_updates < NORMAL_UPDATES
+                   friction_limited, slip_direction)
+        # the Tresca lag: how far the yield forces' N* are from the iterate's normal forces where friction is at
+        # its strength (or would be), Σ|N − N*| / ΣN
+        limited = compression[friction_limited]
+        total = float(np.sum(limited))
+        lag = float(np.sum(np.abs(limited - self.normal_star[friction_limited]))) / total if total > 0.0 else 0.0
+        # N* follows the normal forces once, and again (up to NORMAL_UPDATES times) while the lag exceeds the
+        # friction tolerance
+        friction_unsettled = self.follow_normal_force and self.normal_updates < NORMAL_UPDATES \
+            and bool(np.any(unsettled_friction)) and (self.normal_updates == 0 or lag > p.friction_tolerance)
         full_step = not self.step_lengths or self.step_lengths[-1] == 1.0
         last = np.zeros_like(dd) if self._last_iterate is None else self._last_iterate
         self._change = float(np.max(np.abs(dd - last), initial=0.0))
         self._last_iterate = dd.copy()
         flips = int(np.count_nonzero(flipping))
-        self._unsettled = flips > NEARLY_SETTLED * n
+        self._unsettled = flips > MOVING * n
         settled_states = full_step and flips == 0
         # Tresca: the yield forces' N* stay fixed while the active set settles (each such problem is convex, the
         # line search on its Π converges), then follow the solved normal forces until these settle too.
         # A contact new in the step stuck at an unbounded yield force in this solve (frictionless ones too):
         # the step is done only after a solve with every yield force from a normal force
         all_known = bool(np.all(self.known))
-        done = settled_states and not np.any(unsettled_friction) and all_known
-        changed = flipping | (unsettled_friction if settled_states else False)
+        done = settled_states and not friction_unsettled and all_known
+        changed = flipping | (unsettled_friction if settled_states and friction_unsettled else False)
         self.unsettled_pairs = np.column_stack([r.block_a[changed], r.block_b[changed]])
         self.normal_on, self.stick, self.slip = normal_on, stick, ~stick
         self.slip_direction = slip_direction
         # N* follows once the active set has nearly settled: the last few contacts' changes hardly move the
         # normal forces, and waiting for them would restart the settling after them
         nearly_settled = full_step and flips <= NEARLY_SETTLED * n
-        update = settled_states or (nearly_settled and self.normal_updates < NORMAL_UPDATES)
+        update = (settled_states or nearly_settled) and friction_unsettled
         follows = self.follow_normal_force and not done and (update or not all_known)
         if follows:
             self.normal_updates += bool(update)
