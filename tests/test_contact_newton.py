@@ -63,11 +63,11 @@ def test_a_box_whose_slip_stops_within_a_step_sticks_at_the_next_solve() -> None
 
 
 def test_the_tangent_across_a_slip_is_never_stiffer_than_the_shear_spring(monkeypatch) -> None:
-    # a box landing at 0.2 m/s and sliding at 0.22 m/s over a base (φ = 30°), 60 steps of 1 ms. A contact
-    # modelled slipping whose yield force rose with N* after its state was set has |s| < τ/k_s: its tangent τ/|s|
-    # across the slip reached 6.8e8 k_s (1e21 N/m on slope3d_1k) while N* followed the normal forces once per
-    # step, and the dense solve warned of a matrix with rcond 9e-20; since N* follows them until they settle,
-    # 7 k_s here. The tangent is τ/|s| where the shear is beyond the elastic range, k_s within it (where the
+    # a box sliding at 0.22 m/s over a base (φ = 30°), 30 steps of 1 ms, N* following the normal forces once a
+    # step (at 1 % of the contacts still changing state: the rule that made the case). A contact modelled
+    # slipping whose yield force rose with N* after its state was set has |s| < τ/k_s: its tangent τ/|s| across
+    # the slip reached 6.8e8 k_s here (1e21 N/m on slope3d_1k), and the dense solve warned of a matrix with
+    # rcond 9e-20. The tangent is τ/|s| where the shear is beyond the elastic range, k_s within it (where the
     # two meet)
     from srdda.contact.newton import NewtonContactStep
     from srdda.contact.openclose import magnitudes
@@ -86,39 +86,42 @@ def test_the_tangent_across_a_slip_is_never_stiffer_than_the_shear_spring(monkey
         return out
 
     monkeypatch.setattr(NewtonContactStep, "_tangent_stiffness", recorded)
+    monkeypatch.setattr(newton, "NORMAL_UPDATES", 1)
+    monkeypatch.setattr(newton, "NEARLY_SETTLED", 0.01)
     m = srdda.Model(gravity=(0.0, 0.0, -9.81))
     m.add_material("rock", srdda.Material(2600.0, 1e10, 0.25))
     m.add_joint_material("j", srdda.JointMaterial(friction_angle=30.0), between=[("rock", "rock")])
     m.add_polyhedron(*box((-3, -3, -1), (3, 3, 0)), "rock", fixed=True)
-    m.add_polyhedron(*box((0, 0, 0.001), (1, 1, 0.501)), "rock", velocity=(0.2, -0.1, -0.2))
+    m.add_polyhedron(*box((0, 0, 0), (1, 1, 0.5)), "rock", velocity=(0.2, -0.1, 0.0))
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # the ill-conditioned solve's LinAlgWarning
-        res = run(m, RunSettings(dt=1e-3, n_steps=60, penalty=1e10, contact_solver="newton"))
+        res = run(m, RunSettings(dt=1e-3, n_steps=30, penalty=1e10, contact_solver="newton"))
     assert res.completed, res.status
     used, exact = np.max(ratios, axis=0)
-    assert exact > 2.0  # the case arises (measured 7.0)
+    assert exact > 1e3  # the case arises (measured 6.8e8)
     assert used <= 1.0
 
 
 def test_normal_forces_follow_once_the_active_set_has_nearly_settled() -> None:
     # the Tresca fixed point's N* updates wait for at most 5 % of the contacts to still change state, not for
     # none: the settling after an update no longer follows the last few changes. A 10 × 10 brick wall (570
-    # contacts), 20 steps of 1 ms: fewer solves, the same motion to the friction tolerance
+    # contacts), 20 steps of 1 ms, N* followed until it settles (no cap on the updates, friction tolerance
+    # 1e-5): 180 → 163 solves, the same motion to 2.4e-6 of its largest displacement
     model, settings = brick_wall(10, 10)
     runs = {}
     for fraction in (0.0, NEARLY_SETTLED):
         with pytest.MonkeyPatch.context() as patch:
             patch.setattr(newton, "NEARLY_SETTLED", fraction)
-            runs[fraction] = run(model, replace(settings, n_steps=20, contact_solver="newton"))
+            patch.setattr(newton, "NORMAL_UPDATES", 20)
+            runs[fraction] = run(model, replace(settings, n_steps=20, contact_solver="newton",
+                                                friction_tolerance=1e-5))
     waited, early = runs[0.0], runs[NEARLY_SETTLED]
     assert early.completed and waited.completed
-    assert sum(early.iterations) < sum(waited.iterations)
+    assert sum(early.iterations) < sum(waited.iterations)  # measured 163 against 180
     moved = np.abs(waited.array("centroid")[-1] - waited.array("centroid")[0]).max()
-    # both stop following the normal forces once the friction's N* are within the friction tolerance (1e-3) of
-    # them in aggregate, so their yield forces differ by up to twice that, and the motion by about as much of
-    # the displacement (measured 1.5e-3)
-    assert np.abs(early.array("centroid")[-1] - waited.array("centroid")[-1]).max() <= \
-        2.0 * settings.friction_tolerance * moved
+    # the two solve the same Coulomb problem, N* settled to 1e-5: 1e-4 of the displacement bounds what the
+    # order of the updates changes (measured 2.4e-6)
+    assert np.abs(early.array("centroid")[-1] - waited.array("centroid")[-1]).max() <= 1e-4 * moved
 
 
 def test_inexact_solves_while_contacts_change_state_reach_the_same_step(monkeypatch) -> None:
