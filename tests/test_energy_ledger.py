@@ -68,3 +68,43 @@ def test_a_springs_step_force_loss_is_in_the_ledger(method: str) -> None:
     assert ledger["dissipated_springs"][-1] == pytest.approx(expected, rel=1e-9)  # rounding only
     assert ledger["dissipated_springs"][-1] > 0.5 * ledger["kinetic"][0]  # the loss is large at Δt = T/20
     assert np.max(np.abs(ledger["error"])) < 1e-9 * ledger["kinetic"][0]
+
+
+def _falling_block() -> srdda.Model:
+    """A free 1 × 1 m block in gravity G: Shi's step integrates its constant force exactly, v = v₀ + G·Δt."""
+    m = srdda.Model(gravity=(0.0, -G))
+    m.add_material("rock", srdda.Material(density=2000.0, young=1e10, poisson=0.25))
+    m.add_block([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], "rock", name="block")
+    return m
+
+
+@pytest.mark.parametrize("ratio", [0.8, 0.0])
+def test_the_velocity_damping_is_booked_as_dissipated_damping(ratio: float) -> None:
+    # one step from rest: the scheme's velocity is G·Δt, the scaling by r keeps r² of its kinetic energy and
+    # books the rest, (1 − r²)·½m(GΔt)² (all of it in Shi's static mode, r = 0); then the balance closes
+    model = _falling_block()
+    dt = 1e-2
+    res = srdda.run(model, srdda.RunSettings(dt=dt, n_steps=1, method="srdda", velocity_ratio=ratio))
+    e = res.energies()
+    undamped = 0.5 * float(model.arrays().block_mass[0]) * (G * dt) ** 2
+    # 1e-12: the rounding of the mass matrix and the increments (the identity is exact)
+    assert e["dissipated_damping"][-1] == pytest.approx((1.0 - ratio**2) * undamped, rel=1e-12)
+    assert e["kinetic"][-1] == pytest.approx(ratio**2 * undamped, rel=1e-12, abs=1e-12 * undamped)
+    assert abs(e["balance"][-1] - e["balance"][0]) < 1e-9 * undamped
+
+
+def test_a_stage_that_stops_the_blocks_books_their_kinetic_energy_as_work_of_the_stages() -> None:
+    # a block falls for 5 steps, then a stage with reset_displacements stops it: the stage's start takes out
+    # the kinetic energy the first stage ended with, booked in work_stages, and the balance stays where it was
+    model = _falling_block()
+    model.add_stage(srdda.Stage("fall", run={"n_steps": 5}))
+    model.add_stage(srdda.Stage("stopped", reset_displacements=True, run={"n_steps": 1}))
+    res = srdda.run(model, srdda.RunSettings(dt=1e-2, n_steps=1, method="srdda"))
+    assert res.completed
+    e, steps = res.energies(), res.array("step")
+    end_of_fall = int(np.flatnonzero(steps == 5)[0])
+    assert e["kinetic"][end_of_fall] > 0.0 and np.all(e["work_stages"][:end_of_fall + 1] == 0.0)
+    # the same number, taken out (1e-12: a difference of the stored energies before and after the change)
+    assert e["work_stages"][-1] == pytest.approx(-e["kinetic"][end_of_fall], rel=1e-12)
+    # the balance closes across the stage (the fall's own drift, measured 0, is within rounding of the energy)
+    assert abs(e["balance"][-1] - e["balance"][0]) < 1e-9 * e["kinetic"][end_of_fall]

@@ -3,8 +3,8 @@
 Balance (J per metre of thickness in 2D):
 
     E(t) = kinetic + gravitational + elastic strain + springs and penalties + contacts
-    E(t) - E(0) = W_loads + W_prescribed + W_constraints + W_water - D_dashpots - D_friction - D_contact
-                  - D_springs - D_impact - D_numerical
+    E(t) - E(0) = W_loads + W_prescribed + W_constraints + W_water + W_stages - D_dashpots - D_friction
+                  - D_contact - D_springs - D_impact - D_damping - D_numerical
 
 Every term reports its stored energy (:attr:`srdda.term.Term.energy_kind`)
 and its work per step (:meth:`srdda.term.Term.work`):
@@ -28,14 +28,22 @@ at the gaps detected at t (:meth:`srdda.contact.pipeline.ContactStep.start_energ
 D_impact (``dissipated_impact``): the same for the normal springs of joints
 with a restitution e_n (:mod:`srdda.contact.impact`), whose step loses no
 energy to the spring: their dashpot's loss, the impacts' (1 − e_n²).
+D_damping (``dissipated_damping``): the kinetic energy the velocities' scaling
+by ``velocity_ratio`` < 1 takes out after each step, (1 − r²)·½v*ᵀMv* of the
+scheme's velocity v* (the damped steps of an equilibrium stage and of
+:func:`srdda.simulation.settle`; all of it in Shi's static mode, r = 0).
+W_stages (``work_stages``): what a stage's start changes in the stored energy
+(:func:`srdda.staging.run_stages`: blocks removed with their kinetic,
+gravitational, strain and contact energy, a material changed under its stress,
+bolts installed with their pretension, the velocities reset), booked as put in.
 Neither ``dissipated_contact`` nor ``dissipated_friction`` ever falls over a
 step (:class:`EnergyWatch` warns when one does).
 D_numerical is what is left: the time scheme's and the linearisation's own
 dissipation or drift (among it the change from the contact energy a step
 committed, at gaps moved by the linearised increments, to that at the next
 step's detected gaps), so ``balance`` = E - W_loads - W_prescribed -
-W_constraints - W_water + D_dashpots + D_friction + D_contact + D_springs + D_impact stays at E(0)
-when it is zero.
+W_constraints - W_water - W_stages + D_dashpots + D_friction + D_contact + D_springs + D_impact + D_damping
+stays at E(0) when it is zero.
 
 The gravitational energy is -Σ m g·c over every block, fixed ones included
 (their share is a constant): only its changes have a meaning. The report
@@ -69,9 +77,9 @@ def energies(terms: Sequence[Term], arrays: ModelArrays, state: State) -> dict[s
     out["total"] = sum(out[k] for k in ENERGY_KINDS)
     out.update(zip(LEDGER, map(float, state.ledger)))
     out["balance"] = out["total"] - out["work_loads"] - out["work_prescribed"] - out["work_constraints"] \
-        - out["work_water"] \
+        - out["work_water"] - out["work_stages"] \
         + out["dissipated"] + out["dissipated_friction"] + out["dissipated_contact"] \
-        + out["dissipated_springs"] + out["dissipated_impact"]
+        + out["dissipated_springs"] + out["dissipated_impact"] + out["dissipated_damping"]
     return out
 
 

@@ -7,7 +7,9 @@ an equilibrium stage until the unbalanced-force ratio of :mod:`srdda.equilibrium
 falls below its tolerance) and tells the recorders each stage's begin and end
 (the stage table of the results file). The stage mark rides in the state
 (:class:`StageTerm`), so a run continued from a checkpoint goes on in the stage
-the checkpoint is in, bit for bit.
+the checkpoint is in, bit for bit. What a stage's start changes in the stored
+energy goes to the ledger's ``work_stages`` (:func:`book_stage_start`), so the
+energy balance of a staged run stays closed across its stages.
 """
 from __future__ import annotations
 
@@ -18,18 +20,20 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .equilibrium import SETTLE_VELOCITY_RATIO, UnbalancedForceTerm, reached, unbalanced_force, without_ratio
+from .ledger import energies
 from .modeldata.arrays import ModelArrays
 from .results import Result
 from .settings import RunSettings
 from .stages import CARRIED, CHANGES, StageMark, StagePlan, at_rest, initial_mark, stage_arrays, stage_mark
 from .state import State, initial_state
-from .term import Term
+from .step import default_terms
+from .term import LEDGER, Term
 
 if TYPE_CHECKING:
     from .contact.law import ContactLaw
     from .results import Recorder
 
-__all__ = ["begin_stage", "stage_settings", "StageTerm", "run_stages"]
+__all__ = ["begin_stage", "book_stage_start", "stage_settings", "StageTerm", "run_stages"]
 
 
 def begin_stage(base: ModelArrays, index: int, state: State, before: StageMark) -> tuple[ModelArrays, State]:
@@ -51,6 +55,21 @@ def begin_stage(base: ModelArrays, index: int, state: State, before: StageMark) 
                         rotation=arrays.block_type.initial_rotation(arrays.n_blocks))
     state = replace(without_ratio(state), dt_next=None)
     return arrays, state.carrying(CARRIED, mark)
+
+
+def book_stage_start(before: tuple[ModelArrays, State], after: tuple[ModelArrays, State], settings: RunSettings,
+                     extra_terms: Sequence[Term] = (), contact_law: ContactLaw | None = None) -> State:
+    """The first state of a stage (``after``: its arrays and state) with what its start changed in the stored
+    energy since the end of the stage before (``before``) added to the ledger's ``work_stages`` (J, per m in
+    2D): the kinetic, gravitational, strain, spring and contact energy of the run's terms, each side with its
+    own arrays (removed blocks, materials, bolts)."""
+    def stored(arrays: ModelArrays, state: State) -> float:
+        return energies([*default_terms(arrays, settings, contact_law), *extra_terms], arrays, state)["total"]
+
+    arrays, state = after
+    ledger = state.ledger.copy()
+    ledger[LEDGER.index("work_stages")] += stored(arrays, state) - stored(*before)
+    return replace(state, ledger=ledger)
 
 
 def stage_settings(settings: RunSettings, plan: StagePlan, mark: StageMark, state: State) -> RunSettings:
@@ -162,7 +181,10 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
 
     try:
         if mark is None:
-            stage_arrays_, state = begin_stage(base, 0, state, initial_mark(base))
+            first = initial_mark(base)
+            begun = begin_stage(base, 0, state, first)
+            stage_arrays_, state = begun[0], book_stage_start((stage_arrays(base, first), state), begun, settings,
+                                                              extra_terms, contact_law)
             mark = stage_mark(state)
             assert mark is not None
         else:
@@ -189,7 +211,9 @@ def run_stages(arrays: ModelArrays, settings: RunSettings, progress: Callable[[i
                 break
             if stopped or mark.index + 1 == len(plans):
                 break
-            stage_arrays_, state = begin_stage(base, mark.index + 1, state, mark)
+            begun = begin_stage(base, mark.index + 1, state, mark)
+            stage_arrays_, state = begun[0], book_stage_start((stage_arrays_, state), begun, settings, extra_terms,
+                                                              contact_law)
             mark = stage_mark(state)
             assert mark is not None
     except BaseException as exc:

@@ -8,7 +8,8 @@
     review     a term may cut the step (a vertex moved too far, too deep a
                penetration) or bound the next Δt;
     commit     terms store what they carry to the next step; the work of the
-               step goes to the ledger.
+               step goes to the ledger (with what ``velocity_ratio`` < 1 took
+               out of the velocities: ``dissipated_damping``).
 
 :meth:`Stepper.step` returns a :class:`StepOutcome` (accepted, cut with the
 reason, or diverged with a message); it raises nothing to steer the run.
@@ -21,7 +22,7 @@ from typing import Literal
 
 import numpy as np
 
-from .assembly.blocks import GyroscopicTerm, block_terms
+from .assembly.blocks import GyroscopicTerm, block_terms, mass_matrices
 from .assembly.system import BlockSystem
 from .constraints import point_terms
 from .contact.law import ContactLaw
@@ -34,7 +35,7 @@ from .modeldata.materials import ModelError
 from .settings import RunSettings
 from .solvers import LinearSolver, SolverError, solves_inexactly
 from .state import State
-from .term import StepContext, StepCut, Term
+from .term import LEDGER, StepContext, StepCut, Term
 
 __all__ = ["StepOutcome", "Stepper", "default_terms", "model_half_height", "contact_parameters", "shi_step_bound",
            "time_step_advice"]
@@ -220,7 +221,7 @@ class Stepper:
                                        reason=f"{label}: {cutting[0].pending()} in {solves} solves", cause="iteration")
             elif all(solves - changes >= t.max_iterations for t in pending):
                 break
-        new = self._update(ctx, dd, multipliers)
+        new, damped = self._update(ctx, dd, multipliers)
         if not (np.all(np.isfinite(new.vertices)) and np.all(np.isfinite(new.velocity))):
             return StepOutcome("diverged", solves, dt, reason=f"step {new.step}: non-finite displacement or velocity")
         bounds = []  # the largest Δt each term allows for the next step
@@ -233,14 +234,20 @@ class Stepper:
                 bounds.append(verdict)
         dt_next = min(bounds) if bounds else dt
         work = [w for w in (t.work(ctx, new, dd, multipliers) for t in terms) if w is not None]
+        if damped:
+            damping = np.zeros(len(LEDGER))
+            damping[LEDGER.index("dissipated_damping")] = damped
+            work.append(damping)
         if work:
             new = replace(new, ledger=state.ledger + np.sum(work, axis=0))
         for term in terms:
             new = term.commit(new)
         return StepOutcome("accepted", solves, dt_next, new)
 
-    def _update(self, ctx: StepContext, dd: np.ndarray, multipliers: np.ndarray) -> State:
-        """The state at t + Δt from the increments ``dd`` (the method's kinematics and stress update)."""
+    def _update(self, ctx: StepContext, dd: np.ndarray, multipliers: np.ndarray) -> tuple[State, float]:
+        """The state at t + Δt from the increments ``dd`` (the method's kinematics and stress update), and the
+        kinetic energy the velocities' scaling by ``velocity_ratio`` r took out: (1 − r²)·½v*ᵀMv* of the
+        scheme's velocity v* at t + Δt (J, per m in 2D; 0 for r = 1)."""
         arrays, state, method, c = ctx.arrays, ctx.state, ctx.method, ctx.coeffs
         bt = arrays.block_type
         V, A = state.velocity, state.acceleration
@@ -259,5 +266,12 @@ class Stepper:
             stress = bt.rotate_symmetric(stress, dd, 1.0)
             new_v[:, s] = bt.rotate_symmetric(new_v[:, s], dd, 2.0)
             new_a[:, s] = bt.rotate_symmetric(new_a[:, s], dd, 2.0)
-        return State(state.step + 1, state.time + ctx.dt, vertices, points, new_v, new_a, stress,
-                     bt.compose_rotation(state.rotation, dd), arrays.moments(vertices), multipliers, state.ledger)
+        new = State(state.step + 1, state.time + ctx.dt, vertices, points, new_v, new_a, stress,
+                    bt.compose_rotation(state.rotation, dd), arrays.moments(vertices), multipliers, state.ledger)
+        if ratio == 1.0:
+            return new, 0.0
+        scheme_v = c.v_d * dd + c.v_v * V + c.v_a * A  # the velocity before the scaling (new_v / r, also r = 0)
+        if method.objective_stress:
+            scheme_v[:, s] = bt.rotate_symmetric(scheme_v[:, s], dd, 2.0)
+        kinetic = 0.5 * float(np.einsum("ni,nij,nj->", scheme_v, mass_matrices(arrays, new), scheme_v))
+        return new, (1.0 - ratio**2) * kinetic

@@ -128,6 +128,8 @@ ENERGY_WORDS = {"kinetic": "kinetic energy", "gravity": "gravitational energy (e
                 "dissipated_springs": "energy taken out by the springs' step force",
                 "dissipated_impact": "energy taken out by impacts with a restitution",
                 "work_water": "work of the water pressure",
+                "dissipated_damping": "energy taken out by velocity damping (velocity_ratio)",
+                "work_stages": "energy put in by the stages' changes",
                 "balance": "energy balance E − W_in + D"}
 _COMPONENT_WORDS = {"vx": "velocity x", "vy": "velocity y", "vz": "velocity z", "omega": "angular velocity ω",
                     "omega_x": "angular velocity ωx", "omega_y": "angular velocity ωy",
@@ -698,6 +700,8 @@ LEDGER_PANELS = (
     ("dissipated_contact", "taken out by the contact penalty\n(impacts, springs released stretched)"),
     ("dissipated_springs", "taken out by the springs' step force\n(negative: put in by the point update)"),
     ("dissipated_impact", "taken out by impacts with a restitution\n(their dashpot)"),
+    ("dissipated_damping", "taken out by velocity damping\n(velocity_ratio < 1: equilibrium stages)"),
+    ("work_stages", "put in by the stages' changes\n(removed blocks, bolts, velocities reset)"),
     ("error", "balance error: E − E₀ − W_in + D\n(time scheme, linearisation)"),
 )
 

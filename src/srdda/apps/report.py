@@ -126,6 +126,11 @@ LEDGER_SENTENCES = {
                          "(1 − e_n²) of each impact's energy.",
     "work_water": "Cumulative work of the water pressure in the joints and tension cracks (docs/water.md): "
                   "positive while the uplift pushes the blocks apart or down the slope.",
+    "dissipated_damping": "Cumulative kinetic energy the velocity damping took out (velocity_ratio < 1: the "
+                          "damped steps of an equilibrium stage or of settle).",
+    "work_stages": "Cumulative change of the stored energy at the stages' starts: blocks removed with their "
+                   "energy, materials changed under stress, bolts installed with their pretension, velocities "
+                   "reset (negative: taken out).",
     "error": "Balance error E − E₀ − W_in + D: the time scheme's and the linearisation's own loss or gain; "
              "zero for an exact ledger.",
 }
