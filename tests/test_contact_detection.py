@@ -115,6 +115,19 @@ def test_concave_block_notch_gives_two_contacts():
     assert not any(f[0] == (1.0, 1.0) for f in found)
 
 
+def test_a_corner_in_a_notch_keeps_both_faces_where_it_projects_beyond_one():
+    # The square's corner has slid 1 mm past the notch's corner along the ell's leg top (it projects beyond
+    # that edge's end) and pressed 1 mm into the side wall. It touches both faces: the side wall as a
+    # vertex-edge contact, the leg top as a notch contact measured to its line (2 mm above it). With the side
+    # wall's contact alone the corner could drop onto the leg top unresisted and be found there compressed
+    # (the tunnel example gained 4.8 J/m so, docs/dev/contact-solve.md).
+    ell = [[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]]
+    square = [[0.999, 1.002], [1.8, 1.002], [1.8, 1.8], [0.999, 1.8]]
+    found = _detect(_model(ell, square))
+    at_corner = {f for f in found if f[0] == (0.999, 1.002)}
+    assert at_corner == {((0.999, 1.002), (2.0, 1.0), VERTEX_VERTEX), ((0.999, 1.002), (1.0, 1.0), VERTEX_EDGE)}
+
+
 def test_concave_block_vertex_on_inner_edges():
     # A triangle poking into the notch of a U-shaped block touches both inner walls.
     u = [[0, 0], [3, 0], [3, 2], [2, 2], [2, 1], [1, 1], [1, 2], [0, 2]]

@@ -23,12 +23,20 @@ the signed distance n·(v - p0) is positive outside.
   met), else the
   one from the lower block index when both pass the angle criterion, else the
   one that passes. A projection within ``CORNER`` of an edge's end is at the end.
+* **Vertex in a notch**: where q is a reflex corner of b (interior angle above
+  180°), v touches both faces of the notch: it gets a contact with each edge
+  at q whose angle criterion it passes, measured to that edge's line, whether
+  it projects into the edge or beyond q (no entrance line to choose). With one
+  spring only, a vertex held in a notch by one face drifted into the other
+  unresisted and, found there as a new contact already compressed, brought
+  ½k_n g² from nothing (docs/dev/contact-solve.md).
 
 * **Plausibility**: a vertex behind the edge's line (negative gap) counts
   only if it lies inside the other block, no deeper than the allowed
   penetration, and no closer to another edge of that block that its wedge
   could have entered through (a vertex on the far side of a thin block, or
-  on one edge beside an acute corner, is not a contact with that edge).
+  on one edge beside an acute corner, is not a contact with that edge; the
+  other face of a notch at the edge's end does not compete).
 
 Output: contact vertex, contacted edge (index of its start vertex) and kind
 (0 vertex-edge, 1 vertex-vertex).
@@ -76,6 +84,16 @@ def _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol):
     if -(ax * by - ay * bx) < -sin_tol * la * lb:
         return False
     return nx * ax + ny * ay >= -sin_tol * la and nx * bx + ny * by >= -sin_tol * lb
+
+
+@njit(cache=True)
+def _reflex(X, nxt, prv, q, sin_tol):
+    """Whether vertex q is a reflex corner of its block (a notch: interior angle above 180° + tol)."""
+    ax = X[q, 0] - X[prv[q], 0]
+    ay = X[q, 1] - X[prv[q], 1]
+    bx = X[nxt[q], 0] - X[q, 0]
+    by = X[nxt[q], 1] - X[q, 1]
+    return ax * by - ay * bx < -sin_tol * np.sqrt(ax * ax + ay * ay) * np.sqrt(bx * bx + by * by)
 
 
 @njit(cache=True)
@@ -187,6 +205,8 @@ def _plausible(X, block_ptr, nxt, prv, b, v, e, max_depth, sin_tol):
     for f in range(block_ptr[b], block_ptr[b + 1]):
         if f == e or _segment_distance(X, nxt, f, x, y) >= depth - slack:
             continue
+        if (f == prv[e] and _reflex(X, nxt, prv, e, sin_tol)) or (f == nxt[e] and _reflex(X, nxt, prv, f, sin_tol)):
+            continue  # the notch's other face: v may press on both
         fx0, fy0, fdx, fdy, flength = _edge_frame(X, nxt, f)
         if _wedge_fits(X, nxt, prv, v, fdy / flength, -fdx / flength, sin_tol):
             return False
@@ -227,6 +247,26 @@ def _duplicate(X, block_ptr, nxt, prv, a, v, q, chosen, d0, sin_tol, max_depth):
 
 
 @njit(cache=True)
+def _notch_contacts(X, block_ptr, nxt, prv, b, v, q, d0, sin_tol, max_depth, buf, n):
+    """(buf, n) with v's contacts with the two faces of the notch at q (a reflex corner of b) appended: each
+    edge at q whose angle criterion v passes, within d0 of its line, where v does not project into its
+    interior (there the vertex-edge test finds it) and is plausible."""
+    for f in (prv[q], q):
+        t = _projection(X, nxt, v, f)
+        if CORNER < t < 1.0 - CORNER:
+            continue
+        x0, y0, dx, dy, length = _edge_frame(X, nxt, f)
+        nx = dy / length
+        ny = -dx / length
+        dist = nx * (X[v, 0] - x0) + ny * (X[v, 1] - y0)
+        if abs(dist) < d0 and _wedge_fits(X, nxt, prv, v, nx, ny, sin_tol) \
+                and _plausible(X, block_ptr, nxt, prv, b, v, f, max_depth, sin_tol):
+            buf = push_row(buf, n, (v, f, VERTEX_VERTEX))
+            n += 1
+    return buf, n
+
+
+@njit(cache=True)
 def _pair_contacts(X, block_ptr, nxt, prv, boxes, d0, sin_tol, max_depth, a, b, buf, n):
     """(buf, n) with the contacts of a's vertices against b's edges appended as rows from n on."""
     d02 = d0 * d0
@@ -236,7 +276,9 @@ def _pair_contacts(X, block_ptr, nxt, prv, boxes, d0, sin_tol, max_depth, a, b, 
         if x < boxes[b, 0] - d0 or x > boxes[b, 2] + d0 or y < boxes[b, 1] - d0 or y > boxes[b, 3] + d0:
             continue
         for e in range(block_ptr[b], block_ptr[b + 1]):
-            if (x - X[e, 0]) ** 2 + (y - X[e, 1]) ** 2 < d02:  # vertex-vertex with q = e
+            if (x - X[e, 0]) ** 2 + (y - X[e, 1]) ** 2 < d02 and _reflex(X, nxt, prv, e, sin_tol):
+                buf, n = _notch_contacts(X, block_ptr, nxt, prv, b, v, e, d0, sin_tol, max_depth, buf, n)
+            elif (x - X[e, 0]) ** 2 + (y - X[e, 1]) ** 2 < d02:  # vertex-vertex with q = e
                 chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
                 if chosen >= 0 and not _duplicate(X, block_ptr, nxt, prv, a, v, e, chosen, d0, sin_tol, max_depth) \
                         and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
