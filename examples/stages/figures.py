@@ -13,7 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from srdda import plotting  # noqa: E402
+from srdda.apps import plotting  # noqa: E402
 from srdda.apps.verify.cases.slope3d import WEDGE_PLANES, wedge_solution  # noqa: E402
 from srdda.io import load_model, read_results  # noqa: E402
 
