@@ -24,9 +24,9 @@ import numpy as np
 
 from srdda import RunSettings, run
 from srdda.apps.bench.models import brick_wall
-from srdda.apps.verify.at_rest import INCLINE_STEPS, WALL_SIZE, WALL_TIME, WEDGE_FACTORS, WEDGE_STEPS, _incline
+from srdda.apps.verify.at_rest import INCLINE_STEPS, WALL_SIZE, WALL_TIME, WEDGE_FACTORS, WEDGE_STEPS
 from srdda.apps.verify.cases.slope3d import wedge_friction_for, wedge_model
-from srdda.apps.verify.cases2d import INCLINE_PENALTY
+from srdda.apps.verify.cases2d import INCLINE_PENALTY, STICKING_ANGLE, incline_model_2d
 from srdda.model import Model
 
 SOLVERS = ("open-close", "newton")
@@ -44,7 +44,8 @@ def main() -> None:
     warnings.simplefilter("ignore")  # open-close's energy watch warns on these releases; the figures say enough
     print("model | " + " | ".join(SOLVERS))
     for dim in (2, 3):
-        figures = [travel(_incline(dim), RunSettings(dt=1e-3, n_steps=INCLINE_STEPS, method="srdda",
+        incline = incline_model_2d(STICKING_ANGLE)
+        figures = [travel(incline if dim == 2 else incline.extruded(1.0), RunSettings(dt=1e-3, n_steps=INCLINE_STEPS, method="srdda",
                                                      penalty=INCLINE_PENALTY, contact_solver=solver))
                    for solver in SOLVERS]
         print(f"incline {dim}D, travel in 1 s (m) | " + " | ".join(f"{f:.3g}" for f in figures))

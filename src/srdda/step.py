@@ -252,7 +252,8 @@ class Stepper:
         bt = arrays.block_type
         V, A = state.velocity, state.acceleration
         ratio = self.settings.velocity_ratio
-        new_v = ratio * (c.v_d * dd + c.v_v * V + c.v_a * A)
+        scheme_v = c.v_d * dd + c.v_v * V + c.v_a * A  # the scheme's velocity at t + Δt, before the scaling
+        new_v = ratio * scheme_v
         new_a = ratio * (c.a_d * dd + c.a_v * V + c.a_a * A)
         centroid = state.moments.centroid
         owner = arrays.vertex_block
@@ -270,7 +271,6 @@ class Stepper:
                     bt.compose_rotation(state.rotation, dd), arrays.moments(vertices), multipliers, state.ledger)
         if ratio == 1.0:
             return new, 0.0
-        scheme_v = c.v_d * dd + c.v_v * V + c.v_a * A  # the velocity before the scaling (new_v / r, also r = 0)
         if method.objective_stress:
             scheme_v[:, s] = bt.rotate_symmetric(scheme_v[:, s], dd, 2.0)
         kinetic = 0.5 * float(np.einsum("ni,nij,nj->", scheme_v, mass_matrices(arrays, new), scheme_v))

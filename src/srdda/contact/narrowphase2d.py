@@ -276,15 +276,17 @@ def _pair_contacts(X, block_ptr, nxt, prv, boxes, d0, sin_tol, max_depth, a, b, 
         if x < boxes[b, 0] - d0 or x > boxes[b, 2] + d0 or y < boxes[b, 1] - d0 or y > boxes[b, 3] + d0:
             continue
         for e in range(block_ptr[b], block_ptr[b + 1]):
-            if (x - X[e, 0]) ** 2 + (y - X[e, 1]) ** 2 < d02 and _reflex(X, nxt, prv, e, sin_tol):
-                buf, n = _notch_contacts(X, block_ptr, nxt, prv, b, v, e, d0, sin_tol, max_depth, buf, n)
-            elif (x - X[e, 0]) ** 2 + (y - X[e, 1]) ** 2 < d02:  # vertex-vertex with q = e
-                chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
-                if chosen >= 0 and not _duplicate(X, block_ptr, nxt, prv, a, v, e, chosen, d0, sin_tol, max_depth) \
-                        and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
-                        and _plausible(X, block_ptr, nxt, prv, b, v, chosen, max_depth, sin_tol):
-                    buf = push_row(buf, n, (v, chosen, VERTEX_VERTEX))
-                    n += 1
+            if (x - X[e, 0]) ** 2 + (y - X[e, 1]) ** 2 < d02:  # v near the vertex q = e
+                if _reflex(X, nxt, prv, e, sin_tol):  # in a notch: both faces
+                    buf, n = _notch_contacts(X, block_ptr, nxt, prv, b, v, e, d0, sin_tol, max_depth, buf, n)
+                else:  # vertex-vertex: one contact, on the entrance line
+                    chosen = _entrance_edge(X, nxt, prv, v, e, sin_tol)
+                    if chosen >= 0 \
+                            and not _duplicate(X, block_ptr, nxt, prv, a, v, e, chosen, d0, sin_tol, max_depth) \
+                            and (a < b or _entrance_edge(X, nxt, prv, e, v, sin_tol) < 0) \
+                            and _plausible(X, block_ptr, nxt, prv, b, v, chosen, max_depth, sin_tol):
+                        buf = push_row(buf, n, (v, chosen, VERTEX_VERTEX))
+                        n += 1
             if _vertex_edge(X, block_ptr, nxt, prv, b, v, e, d0, sin_tol, max_depth):
                 buf = push_row(buf, n, (v, e, VERTEX_EDGE))
                 n += 1
