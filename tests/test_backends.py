@@ -11,6 +11,7 @@ solves them (warm-started from one another).
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 
 import numba
@@ -31,7 +32,8 @@ from srdda.apps.bench.models import brick_wall, english_bond_wall
 from srdda.apps.bench.runner import BenchCase, format_table, measure
 from srdda.settings import RunSettings
 from srdda.solvers import (ArrayConjugateGradient, AutoSolver, BlockJacobi, BlockPatternCSR, ConjugateGradientSolver,
-                           SuperLUSolver, block_diagonal_csr, get_solver, gpu_solver)
+                           IterativeSolverError, SuperLUSolver, block_diagonal_csr, get_solver, gpu_solver)
+from srdda.solvers._gpu import spd_inverses
 from srdda.state import initial_state
 from srdda.step import Stepper
 
@@ -50,26 +52,33 @@ def backend(request, monkeypatch) -> ArrayBackend:
 
 
 class _Recorded:
-    """A solver that solves with SuperLU (the run follows the direct path) and keeps every system and solution."""
+    """A solver that solves with SuperLU (the run follows the direct path) and keeps every system and solution;
+    ``keep_springs``: it takes the contact springs unsummed, as the device's CG does (and keeps each system as
+    it came, before the direct solve sums them)."""
 
     name = "recorded"
 
-    def __init__(self) -> None:
+    def __init__(self, keep_springs: bool = False) -> None:
         self.direct = SuperLUSolver()
+        self.keep_springs = keep_springs
         self.solves: list[tuple[BlockSystem, np.ndarray, np.ndarray]] = []
 
+    def takes_springs(self, n_blocks: int) -> bool:
+        return self.keep_springs
+
     def solve(self, system: BlockSystem, rhs: np.ndarray) -> np.ndarray:
+        kept = copy.deepcopy(system) if self.keep_springs else system
         x = self.direct.solve(system, rhs)
-        self.solves.append((system, rhs, x))
+        self.solves.append((kept, rhs, x))
         return x
 
 
-def _step_systems(model, settings, steps: int = 2, stiffness_factor: float = 1.0):
+def _step_systems(model, settings, steps: int = 2, stiffness_factor: float = 1.0, keep_springs: bool = False):
     """Every (system, rhs, exact solution) that ``steps`` steps of ``model`` solve."""
     k = settings.contact_penalty * stiffness_factor
     settings = dataclasses.replace(settings, contact_penalty=k, penalty=k)
     arrays = model.arrays()
-    recorded = _Recorded()
+    recorded = _Recorded(keep_springs)
     stepper = Stepper(arrays, settings, recorded)
     state, dt = initial_state(arrays, stepper.method), settings.dt
     for _ in range(steps):
@@ -113,6 +122,72 @@ def test_the_device_preconditioner_is_block_jacobi(backend):
     applied = backend.to_host(inverse @ backend.to_device(rhs))
     # the same products summed in another order: equal to round-off of the largest term
     assert np.abs(applied - jacobi(rhs)).max() <= 1e-12 * np.abs(jacobi.inverse).max() * np.abs(rhs).max()
+
+
+@pytest.mark.parametrize("wall", WALLS)
+def test_kept_springs_make_the_assembled_matrix(wall):
+    """A step whose solver takes the contact springs unsummed solves the same systems: the kept springs summed
+    into blocks give the matrix the CPU assembles, the right-hand side has their pull-back forces, and the
+    line search's curvature xᵀAx reads them without summing."""
+    model, settings = WALLS[wall]()
+    # the first step and the first solve of the second, where closed contacts pull back. Later solves part by
+    # more than round-off: a sliding contact's friction follows its slip's direction, and slips of 1e-15 m
+    # turn with increments 1e-20 m apart (measured on the 3D wall: 8e-9 of the largest force, step 2)
+    first = len(_step_systems(model, settings, steps=1))
+    summed = _step_systems(model, settings, steps=2)[: first + 1]
+    kept = _step_systems(model, settings, steps=2, keep_springs=True)[: first + 1]
+    assert len(kept) == len(summed) >= 3
+    rng = np.random.default_rng(1)
+    for (system, rhs, x), (reference, rhs_ref, x_ref) in zip(kept, summed):
+        assert system.springs and not reference.springs and not system.pair_blocks
+        dense, expected = copy.deepcopy(system).to_dense(), reference.to_dense()
+        # the same springs summed from the same rows in the same order: equal bits, measured on both walls; the
+        # bound is round-off of the largest entry, for a compiler that fuses the products otherwise
+        scale = np.abs(expected).max()
+        assert np.abs(dense - expected).max() <= 1e-12 * scale
+        assert np.abs(rhs - rhs_ref).max() <= 1e-12 * np.abs(rhs_ref).max()
+        assert np.abs(x - x_ref).max() <= 1e-9  # the same solution, to the solver tolerance δ
+        probe = rng.standard_normal((system.n_blocks, system.ndof))
+        form = system.quadratic_form(probe)
+        assert system.springs  # read without summing them
+        assert form == pytest.approx(probe.ravel() @ expected @ probe.ravel(), rel=1e-12)
+
+
+@pytest.mark.parametrize("wall", WALLS)
+def test_the_device_applies_kept_springs_as_the_assembled_matrix(backend, wall):
+    """The device's product B·x + Rᵀ(w ⊙ R·x) and its block-Jacobi inverse equal the CPU's assembled matrix and
+    inverse on every system of two steps, and its solves meet the tolerance of the direct solve."""
+    solves = _step_systems(*WALLS[wall](), keep_springs=True)
+    solver = ArrayConjugateGradient(backend, 1e-9)
+    rng = np.random.default_rng(2)
+    for system, rhs, exact in solves:
+        summed = copy.deepcopy(system)
+        matrix = summed.to_bsr()
+        springs = solver._device_springs(system)
+        weights = [device.weights(stack) for device, stack in zip(springs, system.springs)]
+        probe = rng.standard_normal(system.size)
+        rest = system.to_bsr(springs=False)
+        applied = backend.to_host(sum((device.apply(backend.to_device(probe), w)
+                                       for device, w in zip(springs, weights)), backend.to_device(rest @ probe)))
+        expected = matrix @ probe
+        assert np.abs(applied - expected).max() <= 1e-12 * np.abs(matrix.data).max() * np.abs(probe).max() * 20
+        diag = backend.to_device(system.diag.copy())
+        for device, w in zip(springs, weights):
+            device.add_diagonal(diag, w)
+        inverse = backend.to_host(spd_inverses(backend, diag))
+        reference = BlockJacobi(summed.diag).inverse
+        assert np.abs(inverse - reference).max() <= 1e-9 * np.abs(reference).max()
+        x = solver.solve(copy.deepcopy(system), rhs)
+        assert np.abs(x - exact).max() <= 1e-9  # the stopping rule's promise
+    assert solver.pattern_builds == 1  # B is block-diagonal throughout: one pattern
+
+
+def test_a_block_that_is_not_positive_definite_is_named_on_the_device(backend):
+    blocks = np.stack([np.eye(3), np.diag([1.0, -1.0, 1.0]), np.eye(3)])
+    with pytest.raises(IterativeSolverError, match="diagonal block 1 "):
+        spd_inverses(backend, backend.to_device(blocks))
+    inverse = backend.to_host(spd_inverses(backend, backend.to_device(np.stack([2.0 * np.eye(3)] * 2))))
+    assert np.allclose(inverse, 0.5 * np.eye(3), rtol=0, atol=1e-15)
 
 
 @pytest.fixture

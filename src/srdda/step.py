@@ -33,7 +33,7 @@ from .integrators.secant import SecantPass
 from .modeldata.arrays import ModelArrays
 from .modeldata.materials import ModelError
 from .settings import RunSettings
-from .solvers import LinearSolver, SolverError, solves_inexactly
+from .solvers import LinearSolver, SolverError, solves_inexactly, takes_springs
 from .state import State
 from .term import LEDGER, StepContext, StepCut, Term
 
@@ -141,6 +141,7 @@ class Stepper:
         self.solver = solver
         self.terms: list[Term] = list(terms) if terms is not None else default_terms(arrays, settings)
         self.secant = SecantPass(settings.secant_tolerance, settings.secant_max_iterations)
+        self.keeps_springs = takes_springs(solver, arrays.n_blocks)  # the solver applies the contact springs
 
     def begin(self, state: State, dt: float) -> tuple[StepContext, list[Term]]:
         """The context of a step attempt from ``state`` and the terms that take part, each begun."""
@@ -166,6 +167,7 @@ class Stepper:
         else:
             system = BlockSystem(base.diag.copy(), base.rhs.copy())
             added = [t for t in terms if not t.same_every_solve]
+        system.keeps_springs = self.keeps_springs
         for term in added:
             term.add_to(system, ctx)
         system.fix_blocks(self.arrays.block_fixed)

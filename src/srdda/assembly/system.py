@@ -6,6 +6,11 @@ for every block and ``pair_blocks`` (np, ndof, ndof) for coupled pairs (row bloc
 block-sparse matrix sums them in one compiled pass (``to_bsr``); the dense one of
 tiny models by ``np.bincount``.
 
+A solver that applies the matrix without assembling it (the device's conjugate gradient,
+``srdda.solvers``) asks for ``keeps_springs``: penalty springs given as :class:`SpringStack` (unit
+rows and which act) are then kept beside the stacks, their right-hand side added at once, and the
+matrix's own methods sum them in only when one is asked for (:meth:`BlockSystem.sum_springs`).
+
 Exact constraints (hinges, pins, prescribed motion by multipliers, paper
 Eqs. 72-75) add rows C (nc, n) with right-hand side g: the system becomes the
 saddle point [[A, Cᵀ], [C, 0]]·[Δd; μ] = [F; g] (``saddle_csr``), where the
@@ -19,7 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit, prange
 
-__all__ = ["BlockSystem", "PenaltyPairs", "add_penalty_pairs", "scatter_add", "PARALLEL_BLOCKS"]
+__all__ = ["BlockSystem", "PenaltyPairs", "SpringStack", "add_penalty_pairs", "scatter_add", "PARALLEL_BLOCKS"]
 
 PARALLEL_BLOCKS = 500  # systems of more blocks run their compiled loops on all cores (docs/performance.md)
 
@@ -156,6 +161,25 @@ def scatter_add(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> No
                   np.ascontiguousarray(values, dtype=np.float64).reshape(len(index), -1))
 
 
+@dataclass(frozen=True)
+class SpringStack:
+    """Penalty springs kept unsummed: ``factor``·Σ rᵀr over the rows r that act, r = [rows_a at block a, −rows_b
+    at block b].
+
+    ``rows_a``, ``rows_b`` (n, m, ndof): the m unit rows of each of n springs, scaled by the square root of
+    their stiffness (a contact's normal row and its shear rows); ``active`` (n, m): the rows that act in
+    this solve. The rows are the same arrays for every solve of a step, so a device keeps its copy
+    while they are.
+    """
+
+    block_a: np.ndarray
+    rows_a: np.ndarray
+    block_b: np.ndarray
+    rows_b: np.ndarray
+    active: np.ndarray
+    factor: float
+
+
 @dataclass
 class BlockSystem:
     """Global matrix of ``n_blocks`` blocks, ``ndof`` unknowns each, and its right-hand side."""
@@ -171,6 +195,8 @@ class BlockSystem:
     con_vals: list[np.ndarray] = field(default_factory=list)
     con_rhs: list[np.ndarray] = field(default_factory=list)
     held: np.ndarray | None = None  # (nb,) blocks held by fix_blocks: their couplings are left out of the matrix
+    keeps_springs: bool = False  # springs given as SpringStack stay unsummed (module doc)
+    springs: list[SpringStack] = field(default_factory=list)
 
     @staticmethod
     def empty(n_blocks: int, ndof: int) -> BlockSystem:
@@ -286,6 +312,21 @@ class BlockSystem:
         for k, cols in enumerate(self.con_cols):  # a held block's columns drop out of C
             self.con_vals[k] = np.where(fixed[cols // self.ndof], 0.0, self.con_vals[k])
 
+    def sum_springs(self) -> None:
+        """Sum the kept springs into the diagonal blocks and a coupling stack (held blocks stay as
+        :meth:`fix_blocks` left them), for a solver that needs the matrix itself."""
+        springs, self.springs = self.springs, []
+        for stack in springs:
+            acting = np.flatnonzero(np.any(stack.active, axis=1))
+            if not len(acting):
+                continue
+            on = stack.active[acting][:, :, None]
+            pairs = PenaltyPairs(stack.block_a[acting], on * stack.rows_a[acting], stack.block_b[acting],
+                                 on * stack.rows_b[acting], np.zeros(stack.active[acting].shape), np.ones(len(acting)))
+            add_penalty_pairs(self, pairs, stack.factor)
+        if springs and self.held is not None:
+            self.diag[self.held] = np.eye(self.ndof)
+
     def _couplings(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Every coupling block in both orders: (row block, column block, its row in [diag; stacks], transposed).
 
@@ -313,6 +354,7 @@ class BlockSystem:
 
     def triplets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(rows, cols, values) of every stored entry, duplicates not summed."""
+        self.sum_springs()
         nb, ndof = self.n_blocks, self.ndof
         r, c = np.meshgrid(np.arange(ndof), np.arange(ndof), indexing="ij")
         base = np.arange(nb) * ndof
@@ -330,18 +372,21 @@ class BlockSystem:
             vals.append(blocks.ravel())
         return np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
 
-    def to_bsr(self) -> sp.bsr_matrix:
+    def to_bsr(self, springs: bool = True) -> sp.bsr_matrix:
         """The matrix in block-sparse rows of ndof×ndof blocks, duplicates summed (:meth:`block_rows`)."""
         n = self.size
-        return sp.bsr_matrix(self.block_rows(), shape=(n, n))
+        return sp.bsr_matrix(self.block_rows(springs), shape=(n, n))
 
-    def block_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def block_rows(self, springs: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The BSR arrays (data (nnzb, ndof, ndof), column indices, row pointers) of the matrix, each row's
         blocks by ascending column, duplicates summed; without scipy's checks, for a backend that reads them.
+        ``springs=False``: without the kept springs (a solver that applies them itself).
 
         Sorting and summing whole blocks (not their 36 entries) keeps the index
         work 36 times smaller than a COO assembly.
         """
+        if springs:
+            self.sum_springs()
         nb = self.n_blocks
         if not self.pair_i:
             return self.diag, np.arange(nb), np.arange(nb + 1)
@@ -374,6 +419,10 @@ class BlockSystem:
         search needs, without assembling A."""
         value = float(np.einsum("ni,nij,nj->", x, self.diag, x))
         held = np.zeros(self.n_blocks, dtype=bool) if self.held is None else self.held
+        for stack in self.springs:
+            value += stack.factor * _spring_form(x, stack.block_a.astype(np.int64, copy=False),
+                                                 stack.block_b.astype(np.int64, copy=False), stack.rows_a,
+                                                 stack.rows_b, stack.active, held)
         for bi, bj, blocks, which in zip(self.pair_i, self.pair_j, self.pair_blocks, self.pair_which):
             index = np.arange(len(bi)) if which is None else np.asarray(which, dtype=np.int64)
             value += 2.0 * _coupling_form(x, bi.astype(np.int64, copy=False), bj.astype(np.int64, copy=False),
@@ -381,6 +430,7 @@ class BlockSystem:
         return value
 
     def to_dense(self) -> np.ndarray:
+        self.sum_springs()
         n = self.size
         if not self.pair_i:
             out = np.zeros((self.n_blocks, self.ndof, self.n_blocks, self.ndof))
@@ -408,6 +458,29 @@ def _coupling_form(x: np.ndarray, bi: np.ndarray, bj: np.ndarray, blocks: np.nda
             for j in range(blocks.shape[2]):
                 row += blocks[c, i, j] * x[b, j]
             total += x[a, i] * row
+    return total
+
+
+@njit(cache=True)
+def _spring_form(x: np.ndarray, block_a: np.ndarray, block_b: np.ndarray, rows_a: np.ndarray, rows_b: np.ndarray,
+                 active: np.ndarray, held: np.ndarray) -> float:
+    """Σ (r_a·x_a − r_b·x_b)² over the acting rows of kept springs, a held block's side left out (its columns
+    are out of the matrix)."""
+    total = 0.0
+    n, m, ndof = rows_a.shape
+    for c in range(n):
+        a = block_a[c]
+        b = block_b[c]
+        for r in range(m):
+            if not active[c, r]:
+                continue
+            s = 0.0
+            for i in range(ndof):
+                if not held[a]:
+                    s += rows_a[c, r, i] * x[a, i]
+                if not held[b]:
+                    s -= rows_b[c, r, i] * x[b, i]
+            total += s * s
     return total
 
 

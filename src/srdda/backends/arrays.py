@@ -52,6 +52,26 @@ class ArrayBackend:
         """``array`` as a numpy array (a copy from the GPU for CuPy)."""
         return array.get() if self.name == "cupy" else np.asarray(array)
 
+    def scatter_add(self, target: Any, index: Any, values: Any) -> None:
+        """``target[index[i]] += values[i]`` for every i, repeated indices summed (atomically on a GPU, so in no
+        fixed order there)."""
+        if self.name == "cupy":
+            import cupyx
+
+            cupyx.scatter_add(target, index, values)
+        else:
+            np.add.at(target, index, values)
+
+    def cholesky(self, blocks: Any) -> Any:
+        """The lower Cholesky factors of symmetric blocks (n, m, m); ``numpy.linalg.LinAlgError`` where one is not
+        positive definite (CuPy says so only when asked: its default gives a factor of garbage)."""
+        if self.name == "cupy":
+            import cupyx
+
+            with cupyx.errstate(linalg="raise"):
+                return self.xp.linalg.cholesky(blocks)
+        return np.linalg.cholesky(blocks)
+
     def synchronize(self) -> None:
         """Wait until the device has done the work queued so far (for timings); nothing to wait for on numpy."""
         if self.name == "cupy":

@@ -13,14 +13,17 @@ contacts' current states to a solve's system, either
   solve, and later solves put in or take out only the springs of contacts
   whose state changed, a normal spring where one closed or opened, the shear
   springs where one locked or slipped (docs/performance.md, "Only the
-  contacts that changed").
+  contacts that changed"), or
+* unsummed, for a solver that applies them itself (``system.keeps_springs``:
+  the device's conjugate gradient): the step's rows once, and which of them
+  act in each solve (:class:`~srdda.assembly.system.SpringStack`).
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
 
-from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, add_penalty_pairs, scatter_add
+from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, SpringStack, add_penalty_pairs, scatter_add
 
 __all__ = ["ContactSprings", "INCREMENTAL_BLOCKS", "is_large", "directional_rows"]
 
@@ -68,6 +71,8 @@ class ContactSprings:
         self.root_normal, self.root_shear = np.sqrt(normal_stiffness), np.sqrt(shear_stiffness)
         # (diag, rhs, coupling block of every contact, the states they sum) of the sums by changes
         self._sums: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        # the rows [√k_n·n·T; √k_s·e·T] of each side and the gaps [√k_n·g₀; √k_s·s₀] of the kept springs
+        self._unit: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def increments(self, dd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """How the gaps (n,) and shear spring displacements (n, k) move with the solve's ``dd``:
@@ -114,6 +119,9 @@ class ContactSprings:
         weight c_p, module doc): by changes to the last call's sums if ``by_changes`` (the open-close solver
         asks so above ``INCREMENTAL_BLOCKS`` blocks, the Newton solver at every size), else afresh."""
         acting = np.flatnonzero(normal | shear)
+        if system.keeps_springs:
+            self._keep(system, acting, normal, shear, c_p)
+            return
         if not by_changes:
             if len(acting):
                 add_penalty_pairs(system, self.springs(acting, normal, shear), c_p)
@@ -135,6 +143,45 @@ class ContactSprings:
         system.rhs += rhs
         # only the acting contacts' coupling blocks: an idle contact's zero block costs every solver iteration
         system.add_off_diagonal(self.block_a, self.block_b, cross, which=acting)
+
+
+    def _keep(self, system: BlockSystem, acting: np.ndarray, normal: np.ndarray, shear: np.ndarray,
+              c_p: float) -> None:
+        """The springs as a :class:`SpringStack` (their matrix left to the solver) and their pull-back forces
+        −k·Tᵀg added to the right-hand side."""
+        if self._unit is None:
+            self._unit = (np.concatenate([self.root_normal[:, None, None] * self.normal_a[:, None],
+                                          self.root_shear[:, None, None] * self.shear_a], axis=1),
+                          np.concatenate([self.root_normal[:, None, None] * self.normal_b[:, None],
+                                          self.root_shear[:, None, None] * self.shear_b], axis=1),
+                          np.concatenate([(self.root_normal * self.gap)[:, None],
+                                          self.root_shear[:, None] * self.shear0], axis=1))
+        rows_a, rows_b, gap = self._unit
+        k = self.shear_a.shape[1]
+        active = np.empty((len(normal), 1 + k), dtype=bool)
+        active[:, 0] = normal
+        active[:, 1:] = shear[:, None]
+        system.springs.append(SpringStack(self.block_a, rows_a, self.block_b, rows_b, active, c_p))
+        if len(acting):
+            _pull_back(system.rhs, acting, self.block_a, self.block_b, rows_a, rows_b, gap, active)
+
+
+@njit(cache=True)
+def _pull_back(rhs: np.ndarray, acting: np.ndarray, block_a: np.ndarray, block_b: np.ndarray, rows_a: np.ndarray,
+               rows_b: np.ndarray, gap: np.ndarray, active: np.ndarray) -> None:
+    """The kept springs' forces −Σ_r g_r·r on block a and +Σ_r g_r·r on block b (rows and gaps scaled by √k, so
+    the products are k·Tᵀg), the acting rows of contacts ``acting`` in turn (one thread: the same bits)."""
+    m, ndof = rows_a.shape[1], rows_a.shape[2]
+    for c in acting:
+        for i in range(ndof):
+            acc_a = 0.0
+            acc_b = 0.0
+            for r in range(m):
+                if active[c, r]:
+                    acc_a += gap[c, r] * rows_a[c, r, i]
+                    acc_b += gap[c, r] * rows_b[c, r, i]
+            rhs[block_a[c], i] -= acc_a
+            rhs[block_b[c], i] += acc_b
 
 
 @njit(parallel=True, cache=True)

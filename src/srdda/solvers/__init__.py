@@ -17,6 +17,8 @@ Choosing a solver
 - ``LinearSolver`` (the interface), ``SolverFactory``, ``SolverError``, ``DEFAULT_TOLERANCE``.
 - :func:`solves_inexactly`: whether a backend stops a system at a tolerance (then a Newton iteration may
   loosen it for one solve).
+- :func:`takes_springs`: whether a backend applies a system's penalty springs itself, unsummed (the device's
+  conjugate gradient; the step then asks the contact springs for their rows, not their sums).
 
 Direct backends (``_direct``)
 -----------------------------
@@ -67,7 +69,7 @@ need a definite matrix). See docs/constraints.md.
 """
 # The order of these imports is the order of available_solvers(): each module registers its backends.
 from ._registry import (DEFAULT_TOLERANCE, LinearSolver, SolverError, SolverFactory, available_solvers, best_direct,
-                        get_solver, register_solver, solves_inexactly)
+                        get_solver, register_solver, solves_inexactly, takes_springs)
 from ._direct import (BlockCholeskySolver, CholmodSolver, DenseSolver, PardisoSolver, SuperLUSolver,
                       blas_threads_for_steps)
 from ._iterative import (BlockJacobi, ConjugateGradientSolver, IterativeSolverError, PCGResult, SmoothedAggregation,
@@ -78,7 +80,7 @@ from ._gpu import ArrayConjugateGradient, BlockPatternCSR, block_diagonal_csr, g
 __all__ = [
     # choosing a solver
     "get_solver", "available_solvers", "register_solver", "best_direct", "blas_threads_for_steps",
-    "LinearSolver", "SolverFactory", "SolverError", "DEFAULT_TOLERANCE", "solves_inexactly",
+    "LinearSolver", "SolverFactory", "SolverError", "DEFAULT_TOLERANCE", "solves_inexactly", "takes_springs",
     # direct backends
     "DenseSolver", "SuperLUSolver", "BlockCholeskySolver", "CholmodSolver", "PardisoSolver",
     # iterative backends and their parts

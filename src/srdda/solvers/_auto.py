@@ -7,7 +7,8 @@ import numpy as np
 
 from ._direct import DenseSolver
 from ._iterative import ConjugateGradientSolver
-from ._registry import DEFAULT_TOLERANCE, LinearSolver, SolverError, best_direct, register_solver, solves_inexactly
+from ._registry import (DEFAULT_TOLERANCE, LinearSolver, SolverError, best_direct, register_solver,
+                        solves_inexactly, takes_springs)
 
 if TYPE_CHECKING:
     from ..assembly.system import BlockSystem
@@ -46,6 +47,10 @@ class AutoSolver:
         if system.n_blocks <= ITERATIVE_LIMIT or system.n_constraints:
             return self.direct
         return self.iterative
+
+    def takes_springs(self, n_blocks: int) -> bool:
+        """The large systems' solver's answer (a system it does not take sums its springs when asked)."""
+        return n_blocks > ITERATIVE_LIMIT and takes_springs(self.iterative, n_blocks)
 
     def inexact(self, system: BlockSystem) -> bool:
         chosen = self.choose(system)

@@ -12,6 +12,14 @@ What moves to the device, per solve:
   by the same compiled Cholesky as the CPU path, which names a block that is not positive definite);
 * the right-hand side and the start (the last solution); the solution comes back.
 
+The contact springs do not go into that matrix (the solver ``takes_springs``, so the step keeps them
+as :class:`~srdda.assembly.system.SpringStack`): their rows move to the device once a step, as a
+sparse matrix R of one row per spring row (the rows of its two blocks), and each solve sends only
+which springs act (weights w). The product is then A·x = B·x + Rᵀ(w ⊙ R·x), B the rest of the matrix
+(the blocks' own terms); block-Jacobi's diagonal blocks get the springs' w·rᵀr summed on the device,
+and their inverses are computed there. This leaves out the CPU's work of summing the springs into
+blocks at every solve and the upload of the summed matrix (wall_100k: 192 MB a solve).
+
 The block pattern (BSR ``indptr`` and ``indices``) moves only when it changed: contacts that open or
 close change it, within a step or from one step to the next. CuPy has no BSR matrix
 (cupyx.scipy.sparse has COO, CSR, CSC and DIA), so the product is a CSR product (cuSPARSE's SpMV on
@@ -28,13 +36,14 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from ..assembly.system import BlockSystem
+from ..assembly.system import BlockSystem, SpringStack
 from ..backends.arrays import GPU_SOLVERS, ArrayBackend, cupy_backend
 from ._auto import AutoSolver
-from ._iterative import BlockJacobi, ConjugateGradientSolver, PCGResult, pcg
+from ._iterative import BlockJacobi, ConjugateGradientSolver, IterativeSolverError, PCGResult, pcg
 from ._registry import DEFAULT_TOLERANCE, LinearSolver, register_solver
 
-__all__ = ["ArrayConjugateGradient", "BlockPatternCSR", "block_diagonal_csr", "gpu_solver"]
+__all__ = ["ArrayConjugateGradient", "BlockPatternCSR", "DeviceSprings", "block_diagonal_csr", "gpu_solver",
+           "spd_inverses"]
 
 
 def _index_dtype(n: int) -> type:
@@ -101,13 +110,80 @@ def block_diagonal_csr(backend: ArrayBackend, n_blocks: int, ndof: int) -> Any:
                                       xp.arange(0, nnz + 1, ndof, dtype=index)), shape=(n, n))
 
 
+class DeviceSprings:
+    """A :class:`SpringStack`'s rows on a backend's device: R (one CSR row per spring row, the 2·ndof entries
+    of its two blocks; a held block's entries zero, its columns being out of the matrix) and Rᵀ.
+
+    Made once for the rows of a step; ``source`` holds the host arrays it was made from, so that a solve
+    can tell whether its stack still has them.
+    """
+
+    def __init__(self, backend: ArrayBackend, stack: SpringStack, held: np.ndarray | None, n_blocks: int) -> None:
+        xp = backend.xp
+        self.backend = backend
+        self.source = (stack.rows_a, held)
+        n, m, ndof = stack.rows_a.shape
+        free = np.ones(n_blocks, dtype=bool) if held is None else ~held
+        block_a, block_b = (backend.to_device(np.asarray(b, dtype=np.int64)) for b in (stack.block_a, stack.block_b))
+        self.block_a, self.block_b = block_a, block_b
+        self.rows_a = backend.to_device(stack.rows_a * free[stack.block_a][:, None, None])
+        self.rows_b = backend.to_device(stack.rows_b * free[stack.block_b][:, None, None])
+        self.uploaded = 2 * stack.rows_a.nbytes + 2 * len(stack.block_a) * 8
+        index = _index_dtype(max(n * m * (ndof + ndof), n_blocks * ndof) + 1)
+        local = xp.arange(ndof, dtype=xp.int64)
+        columns = xp.concatenate([block_a[:, None] * ndof + local, block_b[:, None] * ndof + local], axis=1)
+        width = columns.shape[1]  # the two blocks' unknowns
+        columns = xp.broadcast_to(columns[:, None, :], (n, m, width)).reshape(-1).astype(index)
+        values = xp.concatenate([self.rows_a, -self.rows_b], axis=2).reshape(-1)
+        pointers = xp.arange(0, n * m * width + 1, width, dtype=index)
+        self.matrix = backend.sparse.csr_matrix((values, columns, pointers), shape=(n * m, n_blocks * ndof))
+        self.transpose = self.matrix.T.tocsr()
+
+    def weights(self, stack: SpringStack) -> Any:
+        """w (n·m,): ``factor`` where a row acts, else 0 (the only thing a solve sends)."""
+        active = self.backend.to_device(np.ascontiguousarray(stack.active).reshape(-1))
+        return active.astype(self.backend.xp.float64) * stack.factor
+
+    def apply(self, x: Any, weights: Any) -> Any:
+        """Rᵀ(w ⊙ R·x): the springs' part of A·x."""
+        return self.transpose @ (weights * (self.matrix @ x))
+
+    def add_diagonal(self, diag: Any, weights: Any) -> None:
+        """Add each spring's w·rᵀr to the diagonal blocks ``diag`` (n_blocks, ndof, ndof) of its two blocks."""
+        xp = self.backend.xp
+        n, m, ndof = self.rows_a.shape
+        w = weights.reshape(n, m, 1)
+        for block, rows in ((self.block_a, self.rows_a), (self.block_b, self.rows_b)):
+            self.backend.scatter_add(diag, block, xp.matmul(xp.swapaxes(w * rows, 1, 2), rows))
+
+
+def spd_inverses(backend: ArrayBackend, diag: Any) -> Any:
+    """The inverses of symmetric positive definite blocks ``diag`` (n, ndof, ndof) on the device, by Cholesky
+    (D = L·Lᵀ, D⁻¹ = L⁻ᵀ·L⁻¹); :class:`IterativeSolverError` naming the first block that is not positive definite,
+    as the CPU's block-Jacobi does."""
+    xp = backend.xp
+    try:
+        low = backend.cholesky(diag)
+        failed = not bool(xp.all(xp.isfinite(low)))
+    except np.linalg.LinAlgError:  # for the whole batch: which block, from the eigenvalues
+        failed = True
+    if failed:
+        values = backend.to_host(xp.linalg.eigvalsh(xp.where(xp.isfinite(diag), diag, -1.0)))
+        bad = np.flatnonzero(~(values.min(axis=1) > 0))
+        raise IterativeSolverError(f"diagonal block {int(bad[0]) if len(bad) else 0} of the matrix is not positive "
+                                   "definite: the conjugate gradient needs a symmetric positive definite system")
+    inverse_low = xp.linalg.inv(low)
+    return xp.matmul(xp.swapaxes(inverse_low, 1, 2), inverse_low)
+
+
 class ArrayConjugateGradient(ConjugateGradientSolver):
     """``cg-jacobi`` with the iteration on an array backend's device (module doc).
 
     The same solver as the CPU's (stopping rule, warm start from the last solution, the Ritz estimate
     kept between solves, constrained systems to the best direct backend, a ``SolverError`` saying what
     failed); only :meth:`_pcg` differs. ``uploaded_bytes`` counts what went to the device,
-    ``pattern_builds`` the block patterns built there.
+    ``pattern_builds`` the block patterns built there. The solver applies a system's springs itself
+    (``takes_springs``; module doc).
     """
 
     def __init__(self, backend: ArrayBackend, tolerance: float = DEFAULT_TOLERANCE) -> None:
@@ -117,25 +193,62 @@ class ArrayConjugateGradient(ConjugateGradientSolver):
         self.pattern_builds = 0
         self._pattern: BlockPatternCSR | None = None
         self._jacobi: Any = None  # the block-diagonal CSR matrix of M⁻¹, kept while the system's size stays
+        self._springs: list[DeviceSprings] = []  # the device's copies of the last solve's spring stacks
 
     def _upload(self, array: np.ndarray) -> Any:
         self.uploaded_bytes += array.nbytes
         return self.backend.to_device(array)
 
+    def takes_springs(self, n_blocks: int) -> bool:
+        return True
+
+    def _matrix(self, system: BlockSystem) -> sp.bsr_matrix:
+        """The matrix without the kept springs (the device applies them)."""
+        return system.to_bsr(springs=False)
+
+    def _device_springs(self, system: BlockSystem) -> list[DeviceSprings]:
+        """The device's copies of ``system``'s spring stacks: those of the last solve while their rows are."""
+        kept = []
+        for k, stack in enumerate(system.springs):
+            old = self._springs[k] if k < len(self._springs) else None
+            if old is None or old.source[0] is not stack.rows_a or old.source[1] is not system.held:
+                old = DeviceSprings(self.backend, stack, system.held, system.n_blocks)
+                self.uploaded_bytes += old.uploaded
+            kept.append(old)
+        self._springs = kept
+        return kept
+
     def _pcg(self, system: BlockSystem, matrix: sp.bsr_matrix, rhs: np.ndarray, x0: np.ndarray,
              tolerance: float) -> PCGResult:
         self.setups += 1
-        inverse = BlockJacobi(system.diag).inverse
         ndof = system.ndof
         if self._pattern is None or not self._pattern.same(matrix):
             self._pattern = BlockPatternCSR(self.backend, matrix.indptr, matrix.indices, ndof)
             self.uploaded_bytes += matrix.indptr.nbytes + matrix.indices.nbytes
             self.pattern_builds += 1
-        product = self._pattern.load(self._upload(np.ascontiguousarray(matrix.data)))
+        data = self._upload(np.ascontiguousarray(matrix.data))
+        product = self._pattern.load(data)
         if self._jacobi is None or self._jacobi.shape[0] != system.size:
             self._jacobi = block_diagonal_csr(self.backend, system.n_blocks, ndof)
-        self._jacobi.data = self._upload(inverse).reshape(-1)
-        result = pcg(product.__matmul__, self._jacobi.__matmul__, self._upload(rhs), self._upload(x0),
+        matvec = product.__matmul__
+        springs = self._device_springs(system)
+        if springs:
+            weights = [device.weights(stack) for device, stack in zip(springs, system.springs)]
+            self.uploaded_bytes += sum(stack.active.size for stack in system.springs)
+            only_diagonal = len(matrix.indices) == system.n_blocks  # B is block-diagonal: its data are the blocks
+            diag = data.copy() if only_diagonal else self._upload(np.ascontiguousarray(system.diag))
+            for device, w in zip(springs, weights):
+                device.add_diagonal(diag, w)
+            self._jacobi.data = spd_inverses(self.backend, diag).reshape(-1)
+
+            def matvec(x: Any) -> Any:
+                y = product @ x
+                for device, w in zip(springs, weights):
+                    y += device.apply(x, w)
+                return y
+        else:
+            self._jacobi.data = self._upload(BlockJacobi(system.diag).inverse).reshape(-1)
+        result = pcg(matvec, self._jacobi.__matmul__, self._upload(rhs), self._upload(x0),
                      tolerance, self.MAX_ITERATIONS, self._ritz)
         return replace(result, x=self.backend.to_host(result.x))
 

@@ -455,11 +455,15 @@ class ConjugateGradientSolver:
     def inexact(self, system: BlockSystem) -> bool:
         return not system.n_constraints  # constrained systems go to the direct backend
 
+    def _matrix(self, system: BlockSystem) -> sp.bsr_matrix:
+        """The matrix that :meth:`_pcg` is given: the whole assembled one."""
+        return system.to_bsr()
+
     def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray:
         if system.n_constraints:
             return self.direct.solve(system, rhs)
         tolerance = self.tolerance if tolerance is None else tolerance
-        matrix = system.to_bsr()
+        matrix = self._matrix(system)
         if self._x is None or len(self._x) != len(rhs):
             if self._x is not None or self.preconditioner == "jacobi":  # another model: forget its estimate
                 self._ritz = np.inf

@@ -52,6 +52,13 @@ def solves_inexactly(solver: LinearSolver, system: BlockSystem) -> bool:
     return bool(inexact(system)) if inexact is not None else False
 
 
+def takes_springs(solver: LinearSolver, n_blocks: int) -> bool:
+    """Whether ``solver`` applies a system's penalty springs itself, unsummed (its ``takes_springs``, for
+    systems of ``n_blocks`` blocks; a backend without one reads the assembled matrix)."""
+    takes = getattr(solver, "takes_springs", None)
+    return bool(takes(n_blocks)) if takes is not None else False
+
+
 SolverFactory = Callable[[float], LinearSolver]  # the displacement tolerance (m) -> a solver for one run
 
 

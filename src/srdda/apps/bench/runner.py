@@ -70,7 +70,7 @@ from ...modeldata.arrays import ModelArrays
 from ...results import Result
 from ...settings import RunSettings, ContactSolverName
 from ...step import Stepper
-from ...solvers import DEFAULT_TOLERANCE, solves_inexactly
+from ...solvers import DEFAULT_TOLERANCE, solves_inexactly, takes_springs
 from ...term import CUT_CAUSES
 from .models import brick_wall, english_bond_wall, jointed_slope, jointed_slope_3d
 
@@ -213,6 +213,9 @@ class _TimedSolver:
 
     def inexact(self, system: BlockSystem) -> bool:
         return solves_inexactly(self._inner, system)
+
+    def takes_springs(self, n_blocks: int) -> bool:
+        return takes_springs(self._inner, n_blocks)
 
     def solve(self, system: BlockSystem, rhs: np.ndarray, tolerance: float | None = None) -> np.ndarray:
         if time.perf_counter() > self._probe.deadline:
