@@ -149,21 +149,36 @@ class ContactSprings:
               c_p: float) -> None:
         """The springs as a :class:`SpringStack` (their matrix left to the solver) and their pull-back forces
         −k·Tᵀg added to the right-hand side."""
+        n, k, ndof = self.shear_a.shape
         if self._unit is None:
-            self._unit = (np.concatenate([self.root_normal[:, None, None] * self.normal_a[:, None],
-                                          self.root_shear[:, None, None] * self.shear_a], axis=1),
-                          np.concatenate([self.root_normal[:, None, None] * self.normal_b[:, None],
-                                          self.root_shear[:, None, None] * self.shear_b], axis=1),
-                          np.concatenate([(self.root_normal * self.gap)[:, None],
-                                          self.root_shear[:, None] * self.shear0], axis=1))
+            self._unit = (np.empty((n, 1 + k, ndof)), np.empty((n, 1 + k, ndof)), np.empty((n, 1 + k)))
+            _unit_rows(self.root_normal, self.root_shear, self.normal_a, self.normal_b, self.shear_a, self.shear_b,
+                       self.gap, self.shear0, *self._unit)
         rows_a, rows_b, gap = self._unit
-        k = self.shear_a.shape[1]
         active = np.empty((len(normal), 1 + k), dtype=bool)
         active[:, 0] = normal
         active[:, 1:] = shear[:, None]
         system.springs.append(SpringStack(self.block_a, rows_a, self.block_b, rows_b, active, c_p))
         if len(acting):
             _pull_back(system.rhs, acting, self.block_a, self.block_b, rows_a, rows_b, gap, active)
+
+
+@njit(parallel=True, cache=True)
+def _unit_rows(root_normal: np.ndarray, root_shear: np.ndarray, normal_a: np.ndarray, normal_b: np.ndarray,
+               shear_a: np.ndarray, shear_b: np.ndarray, gap: np.ndarray, shear0: np.ndarray, rows_a: np.ndarray,
+               rows_b: np.ndarray, gaps: np.ndarray) -> None:
+    """The kept springs' rows [√k_n·n·T; √k_s·e·T] of each side and their gaps [√k_n·g₀; √k_s·s₀], one pass."""
+    n, k, ndof = shear_a.shape
+    for c in prange(n):
+        for i in range(ndof):
+            rows_a[c, 0, i] = root_normal[c] * normal_a[c, i]
+            rows_b[c, 0, i] = root_normal[c] * normal_b[c, i]
+        gaps[c, 0] = root_normal[c] * gap[c]
+        for r in range(k):
+            for i in range(ndof):
+                rows_a[c, 1 + r, i] = root_shear[c] * shear_a[c, r, i]
+                rows_b[c, 1 + r, i] = root_shear[c] * shear_b[c, r, i]
+            gaps[c, 1 + r] = root_shear[c] * shear0[c, r]
 
 
 @njit(cache=True)
