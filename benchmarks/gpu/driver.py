@@ -187,6 +187,8 @@ def compare(args: argparse.Namespace, backend: ArrayBackend) -> None:
         finals, runs = {}, {}
         for label, changes in (("cpu", {"device": "cpu"}), ("gpu", {"device": "gpu"}),
                                ("direct", {"device": "cpu", "solver": "superlu"})):
+            if label not in args.runs.split(","):
+                continue
             if label == "direct" and _left(args.deadline) < 20:
                 runs[label] = {"note": "skipped: less than 20 s left"}
                 continue
@@ -391,6 +393,7 @@ def main() -> None:
     ap.add_argument("--top", type=int, default=40, help="profile: how many functions to list")
     ap.add_argument("--timeout", type=float, default=120.0, help="bench: wall-time limit per model (s)")
     ap.add_argument("--devices", default="gpu,cpu", help="bench: the devices, in order")
+    ap.add_argument("--runs", default="cpu,gpu,direct", help="compare: the runs (cpu, gpu, direct; cpu and gpu needed)")
     ap.add_argument("--fake-gpu", action="store_true", help="the GPU path on numpy (a rehearsal without a GPU)")
     ap.add_argument("--small", action="store_true", help="small models (a rehearsal)")
     args = ap.parse_args()
