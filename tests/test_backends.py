@@ -26,7 +26,7 @@ from srdda import simulation
 from srdda.assembly.system import BlockSystem
 from srdda.backends import arrays as arrays_module
 from srdda.solvers import _gpu as cg_module
-from srdda.backends.arrays import (GPU_MIN_BLOCKS, ArrayBackend, GpuUnavailable, cupy_backend, gpu_problem,
+from srdda.backends.arrays import (GPU_MIN_UNKNOWNS, ArrayBackend, GpuUnavailable, cupy_backend, gpu_problem,
                                    numpy_backend, resolve_device)
 from srdda.apps.bench.models import brick_wall, english_bond_wall
 from srdda.apps.bench.runner import BenchCase, format_table, measure
@@ -268,13 +268,18 @@ def test_twenty_steps_on_the_device_end_where_the_cpu_path_ends(backend, model, 
 
 def test_auto_takes_the_gpu_for_large_models_only_when_one_is_present(monkeypatch):
     monkeypatch.setattr(arrays_module, "gpu_problem", lambda: None)
-    assert resolve_device("auto", "auto", GPU_MIN_BLOCKS) == "gpu"
-    assert resolve_device("auto", "cg-jacobi", GPU_MIN_BLOCKS) == "gpu"
-    assert resolve_device("auto", "auto", GPU_MIN_BLOCKS - 1) == "cpu"
-    assert resolve_device("auto", "superlu", GPU_MIN_BLOCKS) == "cpu"  # no GPU backend: the CPU
-    assert resolve_device("cpu", "auto", GPU_MIN_BLOCKS) == "cpu"
+    assert resolve_device("auto", "auto", GPU_MIN_UNKNOWNS) == "gpu"
+    assert resolve_device("auto", "cg-jacobi", GPU_MIN_UNKNOWNS) == "gpu"
+    assert resolve_device("auto", "auto", GPU_MIN_UNKNOWNS - 1) == "cpu"
+    assert resolve_device("auto", "superlu", GPU_MIN_UNKNOWNS) == "cpu"  # no GPU backend: the CPU
+    assert resolve_device("cpu", "auto", GPU_MIN_UNKNOWNS) == "cpu"
+    # measured (docs/gpu.md): the 10,051-block 2D wall ran slower on an H200 than on its machine's 16 cores, the
+    # 3D wall of 10,000 blocks faster
+    two_d, three_d = brick_wall(24, 24)[0].arrays(), english_bond_wall(3, 3)[0].arrays()
+    assert resolve_device("auto", "auto", 10_051 * two_d.block_type.ndof) == "cpu"
+    assert resolve_device("auto", "auto", 10_000 * three_d.block_type.ndof) == "gpu"
     monkeypatch.setattr(arrays_module, "gpu_problem", lambda: "CuPy is not installed")
-    assert resolve_device("auto", "auto", 10 * GPU_MIN_BLOCKS) == "cpu"
+    assert resolve_device("auto", "auto", 10 * GPU_MIN_UNKNOWNS) == "cpu"
 
 
 def test_a_gpu_asked_for_where_there_is_none_is_one_clear_error(monkeypatch, tmp_path):

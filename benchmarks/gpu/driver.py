@@ -275,7 +275,7 @@ def profile(args: argparse.Namespace) -> None:
     model, settings = _build(args.model, args.small)
     arrays = model.arrays()
     settings = replace(settings, device=args.device)
-    solver = get_solver(settings.solver, settings.solver_tolerance, settings.resolved_device(arrays.n_blocks))
+    solver = get_solver(settings.solver, settings.solver_tolerance, settings.resolved_device(arrays.n_unknowns))
     stepper = Stepper(arrays, settings, solver, default_terms(arrays, settings))
     state, dt = initial_state(arrays, stepper.method), settings.dt
     built = time.perf_counter() - t0

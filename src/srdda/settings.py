@@ -96,7 +96,7 @@ class RunSettings:
     # of the increment is estimated within this of the exact solution (m): docs/performance.md
     solver_tolerance: Annotated[Metres, Field(gt=0, le=1.0)] = DEFAULT_TOLERANCE
     # where the conjugate gradient runs: "cpu", "gpu" (CuPy and a CUDA GPU, srdda[gpu]) or "auto" (the GPU for
-    # models of GPU_MIN_BLOCKS blocks or more when one is present; docs/gpu.md)
+    # models of GPU_MIN_UNKNOWNS unknowns or more when one is present; docs/gpu.md)
     device: DeviceName = "auto"
     # The secant pass stops when |Δθ|·|δθ| (δθ: change of the rotation increment between two solves)
     # is below this: the mismatch between the linearised and the exact rotation displacement of a
@@ -170,14 +170,15 @@ class RunSettings:
         """The method preset with this run's scheme and linearisation overrides."""
         return method_preset(self.method, self.rho_inf, self.scheme, self.linearization)
 
-    def resolved_device(self, n_blocks: int) -> str:
-        """Where the linear solves of a model of ``n_blocks`` blocks run: "cpu" or "gpu" (``device`` resolved).
+    def resolved_device(self, unknowns: int) -> str:
+        """Where the linear solves of a model of ``unknowns`` unknowns (blocks × ndof) run: "cpu" or "gpu"
+        (``device`` resolved).
 
         Raises :class:`~srdda.backends.arrays.GpuUnavailable` (a ValueError naming the field) for
         ``device = "gpu"`` where CuPy or a CUDA device is missing: checked when a run starts, not here,
         so that the settings stored with a GPU run's results still read on a machine without one.
         """
-        return resolve_device(self.device, self.solver, n_blocks)
+        return resolve_device(self.device, self.solver, unknowns)
 
     @property
     def last_step_limit(self) -> float:

@@ -81,7 +81,7 @@ def run_single(model: Model | ModelArrays, settings: RunSettings, progress: Call
     """
     arrays = model.arrays() if isinstance(model, Model) else model
     terms = [*default_terms(arrays, settings, contact_law), *extra_terms]
-    solver = get_solver(settings.solver, settings.solver_tolerance, settings.resolved_device(arrays.n_blocks))
+    solver = get_solver(settings.solver, settings.solver_tolerance, settings.resolved_device(arrays.n_unknowns))
     stepper = Stepper(arrays, settings, solver, terms)
     state = state if state is not None else initial_state(arrays, stepper.method)
     result = Result(arrays.block_names, stepper.method.name, keep_history, keep_vertices=keep_vertices)

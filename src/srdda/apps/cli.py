@@ -73,7 +73,7 @@ def _compile(model: Model, settings: RunSettings, source: str) -> ModelArrays:
     try:
         arrays = model.arrays()
         Stepper(arrays, settings, get_solver(settings.solver, settings.solver_tolerance))
-        settings.resolved_device(arrays.n_blocks)  # a GPU asked for where there is none
+        settings.resolved_device(arrays.n_unknowns)  # a GPU asked for where there is none
     except (ModelError, GpuUnavailable) as exc:
         raise click.UsageError(f"{source}: {exc}") from None
     return arrays

@@ -6,8 +6,8 @@ lines run on numpy in CI and on CuPy on a GPU. The array API standard (and ``arr
 has no sparse matrices, which the solve needs, so the backend pairs the two modules itself.
 
 CuPy is optional (``pip install srdda[gpu]``, see docs/dependencies.md) and imported only when a
-GPU is asked for, or when ``device = "auto"`` meets a model of at least :data:`GPU_MIN_BLOCKS`
-blocks and CuPy is installed.
+GPU is asked for, or when ``device = "auto"`` meets a model of at least :data:`GPU_MIN_UNKNOWNS`
+unknowns and CuPy is installed.
 """
 from __future__ import annotations
 
@@ -20,16 +20,18 @@ from typing import Any, Literal, get_args
 import numpy as np
 import scipy.sparse
 
-__all__ = ["ArrayBackend", "DEVICES", "DeviceName", "GPU_MIN_BLOCKS", "GPU_SOLVERS", "GpuUnavailable", "cupy_backend",
+__all__ = ["ArrayBackend", "DEVICES", "DeviceName", "GPU_MIN_UNKNOWNS", "GPU_SOLVERS", "GpuUnavailable", "cupy_backend",
            "gpu_problem", "numpy_backend", "resolve_device"]
 
 DeviceName = Literal["cpu", "gpu", "auto"]
 DEVICES: tuple[DeviceName, ...] = get_args(DeviceName)
 # solvers with a GPU backend: the block-Jacobi conjugate gradient, and ``auto``, whose large systems use it
 GPU_SOLVERS = ("auto", "cg-jacobi")
-# ``device = "auto"`` takes the GPU for models of at least this many blocks: from here on the GPU's steps are as
-# fast as a 16-core CPU's or faster, below slower (benchmarks/gpu/rows.sh on an H200, docs/gpu.md)
-GPU_MIN_BLOCKS = 10_000
+# ``device = "auto"`` takes the GPU for models of at least this many unknowns (blocks × ndof): measured on an H200
+# machine against its 16 cores, the 10,051-block 2D wall (60,306 unknowns) ran slower on the GPU (4.15 against
+# 5.07 steps a second), the 3D wall of 10,000 blocks (120,000) and the 2D wall of 100,000 blocks (600,000) as fast
+# or faster (docs/gpu.md)
+GPU_MIN_UNKNOWNS = 100_000
 
 
 class GpuUnavailable(ValueError):
@@ -125,16 +127,16 @@ def cupy_backend() -> ArrayBackend:
     return ArrayBackend("cupy", cupy, cupyx.scipy.sparse)
 
 
-def resolve_device(device: str, solver: str, n_blocks: int) -> Literal["cpu", "gpu"]:
+def resolve_device(device: str, solver: str, unknowns: int) -> Literal["cpu", "gpu"]:
     """Where a run of ``n_blocks`` blocks solves: ``device`` itself, or for "auto" the GPU when the solver has
-    a GPU backend, the model has at least :data:`GPU_MIN_BLOCKS` blocks and a GPU is present.
+    a GPU backend, the model has at least :data:`GPU_MIN_UNKNOWNS` unknowns and a GPU is present.
 
     "gpu" where there is none raises :class:`GpuUnavailable` saying why, naming the setting.
     """
     if device not in DEVICES:
         raise ValueError(f"unknown device {device!r}; choose one of {', '.join(DEVICES)}")
     if device == "auto":
-        wanted = solver in GPU_SOLVERS and n_blocks >= GPU_MIN_BLOCKS
+        wanted = solver in GPU_SOLVERS and unknowns >= GPU_MIN_UNKNOWNS
         return "gpu" if wanted and gpu_problem() is None else "cpu"
     if device == "gpu" and gpu_problem() is not None:
         raise GpuUnavailable(f"device = 'gpu' was asked for, but {gpu_problem()}; use device 'cpu' or 'auto'")

@@ -97,6 +97,11 @@ class ModelArrays:
     def n_blocks(self) -> int:
         return len(self.block_ptr) - 1
 
+    @property
+    def n_unknowns(self) -> int:
+        """The step system's unknowns: blocks × the block type's ndof."""
+        return self.n_blocks * self.block_type.ndof
+
     @cached_property
     def block_mass(self) -> np.ndarray:
         """Mass (nb,) of every block: density × volume of the model as built (kg per m of thickness in 2D).
