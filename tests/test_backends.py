@@ -182,6 +182,23 @@ def test_the_device_applies_kept_springs_as_the_assembled_matrix(backend, wall):
     assert solver.pattern_builds == 1  # B is block-diagonal throughout: one pattern
 
 
+def test_a_device_solve_with_kept_springs_and_coupling_blocks_leaves_the_system_as_it_was(backend):
+    """Newton's 3D steps add coupling blocks beside the kept springs (the slipping contacts' tangent springs):
+    the device sums the springs into its own copy of the diagonal blocks, and its solves meet δ. On numpy the
+    upload is the host array itself: summing into it changed the system that the line search then read
+    (found by a 3D Newton run whose line search saw a curvature 60 times too large)."""
+    model, settings = english_bond_wall(5, 3)
+    solves = _step_systems(model, dataclasses.replace(settings, contact_solver="newton"), steps=1, keep_springs=True)
+    coupled = [(system, rhs, exact) for system, rhs, exact in solves if system.pair_blocks and system.springs]
+    assert coupled  # slipping contacts with a tangent spring in the first step (measured: 3 of 5 solves)
+    solver = ArrayConjugateGradient(backend, 1e-9)
+    for system, rhs, exact in coupled:
+        diag, pairs = system.diag.copy(), [blocks.copy() for blocks in system.pair_blocks]
+        x = solver.solve(system, rhs)
+        assert np.array_equal(system.diag, diag) and all(np.array_equal(a, b) for a, b in zip(system.pair_blocks, pairs))
+        assert np.abs(x - exact).max() <= 1e-9
+
+
 def test_a_block_that_is_not_positive_definite_is_named_on_the_device(backend):
     blocks = np.stack([np.eye(3), np.diag([1.0, -1.0, 1.0]), np.eye(3)])
     with pytest.raises(IterativeSolverError, match="diagonal block 1 "):

@@ -236,7 +236,8 @@ class ArrayConjugateGradient(ConjugateGradientSolver):
             weights = [device.weights(stack) for device, stack in zip(springs, system.springs)]
             self.uploaded_bytes += sum(stack.active.size for stack in system.springs)
             only_diagonal = len(matrix.indices) == system.n_blocks  # B is block-diagonal: its data are the blocks
-            diag = data.copy() if only_diagonal else self._upload(np.ascontiguousarray(system.diag))
+            # a copy: on numpy the upload is the host array itself, which the springs' sums must not change
+            diag = (data if only_diagonal else self._upload(np.ascontiguousarray(system.diag))).copy()
             for device, w in zip(springs, weights):
                 device.add_diagonal(diag, w)
             self._jacobi.data = spd_inverses(self.backend, diag).reshape(-1)
