@@ -195,7 +195,8 @@ def test_a_device_solve_with_kept_springs_and_coupling_blocks_leaves_the_system_
     for system, rhs, exact in coupled:
         diag, pairs = system.diag.copy(), [blocks.copy() for blocks in system.pair_blocks]
         x = solver.solve(system, rhs)
-        assert np.array_equal(system.diag, diag) and all(np.array_equal(a, b) for a, b in zip(system.pair_blocks, pairs))
+        assert np.array_equal(system.diag, diag)
+        assert all(np.array_equal(a, b) for a, b in zip(system.pair_blocks, pairs))
         assert np.abs(x - exact).max() <= 1e-9
 
 

@@ -117,7 +117,8 @@ class ContactSprings:
                by_changes: bool) -> None:
         """Add the normal springs where ``normal`` and the shear springs where ``shear`` to ``system`` (matrix
         weight c_p, module doc): by changes to the last call's sums if ``by_changes`` (the open-close solver
-        asks so above ``INCREMENTAL_BLOCKS`` blocks, the Newton solver at every size), else afresh."""
+        asks so above ``INCREMENTAL_BLOCKS`` blocks, the Newton solver at every size), else afresh; unsummed
+        where ``system.keeps_springs`` (module doc)."""
         acting = np.flatnonzero(normal | shear)
         if system.keeps_springs:
             self._keep(system, acting, normal, shear, c_p)
@@ -143,7 +144,6 @@ class ContactSprings:
         system.rhs += rhs
         # only the acting contacts' coupling blocks: an idle contact's zero block costs every solver iteration
         system.add_off_diagonal(self.block_a, self.block_b, cross, which=acting)
-
 
     def _keep(self, system: BlockSystem, acting: np.ndarray, normal: np.ndarray, shear: np.ndarray,
               c_p: float) -> None:
