@@ -8,8 +8,9 @@ only puts the matrix, the preconditioner and the vectors on the backend's device
 What moves to the device, per solve:
 
 * the values of the step's matrix, as the CPU assembles them (``BlockSystem.to_bsr``: ndof×ndof
-  blocks, duplicates summed), and the inverse diagonal blocks of block-Jacobi (computed on the CPU
-  by the same compiled Cholesky as the CPU path, which names a block that is not positive definite);
+  blocks, duplicates summed), and, for a system without kept springs, the inverse diagonal blocks of
+  block-Jacobi (computed on the CPU by the same compiled Cholesky as the CPU path, which names a block
+  that is not positive definite);
 * the right-hand side and the start (the last solution); the solution comes back.
 
 The contact springs do not go into that matrix (the solver ``takes_springs``, so the step keeps them
@@ -39,7 +40,7 @@ import scipy.sparse as sp
 from ..assembly.system import BlockSystem, SpringStack
 from ..backends.arrays import GPU_SOLVERS, ArrayBackend, cupy_backend
 from ._auto import AutoSolver
-from ._iterative import BlockJacobi, ConjugateGradientSolver, IterativeSolverError, PCGResult, pcg
+from ._iterative import BlockJacobi, ConjugateGradientSolver, PCGResult, not_positive_definite_block, pcg
 from ._registry import DEFAULT_TOLERANCE, LinearSolver, register_solver
 
 __all__ = ["ArrayConjugateGradient", "BlockPatternCSR", "DeviceSprings", "block_diagonal_csr", "gpu_solver",
@@ -159,8 +160,7 @@ class DeviceSprings:
 
 def spd_inverses(backend: ArrayBackend, diag: Any) -> Any:
     """The inverses of symmetric positive definite blocks ``diag`` (n, ndof, ndof) on the device, by Cholesky
-    (D = L·Lᵀ, D⁻¹ = L⁻ᵀ·L⁻¹); :class:`IterativeSolverError` naming the first block that is not positive definite,
-    as the CPU's block-Jacobi does."""
+    (D = L·Lᵀ, D⁻¹ = L⁻ᵀ·L⁻¹); the CPU block-Jacobi's error naming the first block that is not positive definite."""
     xp = backend.xp
     try:
         low = backend.cholesky(diag)
@@ -170,8 +170,7 @@ def spd_inverses(backend: ArrayBackend, diag: Any) -> Any:
     if failed:
         values = backend.to_host(xp.linalg.eigvalsh(xp.where(xp.isfinite(diag), diag, -1.0)))
         bad = np.flatnonzero(~(values.min(axis=1) > 0))
-        raise IterativeSolverError(f"diagonal block {int(bad[0]) if len(bad) else 0} of the matrix is not positive "
-                                   "definite: the conjugate gradient needs a symmetric positive definite system")
+        raise not_positive_definite_block(int(bad[0]) if len(bad) else 0)
     inverse_low = xp.linalg.inv(low)
     return xp.matmul(xp.swapaxes(inverse_low, 1, 2), inverse_low)
 

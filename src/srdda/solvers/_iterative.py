@@ -334,6 +334,12 @@ def _spd_inverses(diag: np.ndarray, out: np.ndarray, width: tuple[float, ...]) -
     return failed
 
 
+def not_positive_definite_block(block: int) -> IterativeSolverError:
+    """The error of block-Jacobi (on the CPU or a device) whose diagonal block ``block`` is not positive definite."""
+    return IterativeSolverError(f"diagonal block {block} of the matrix is not positive definite: "
+                                "the conjugate gradient needs a symmetric positive definite system")
+
+
 class BlockJacobi:
     """M = the block diagonal of A (ndof×ndof blocks): its inverse applied to all blocks at once.
 
@@ -348,8 +354,7 @@ class BlockJacobi:
         # a principal sub-matrix of an SPD matrix is SPD: a block that is not shows the matrix is not
         failed = _spd_inverses(np.ascontiguousarray(diag, dtype=np.float64), self.inverse, (0.0,) * self.ndof)
         if failed < len(diag):
-            raise IterativeSolverError(f"diagonal block {failed} of the matrix is not positive definite: "
-                                       "the conjugate gradient needs a symmetric positive definite system")
+            raise not_positive_definite_block(failed)
 
     def __call__(self, r: Array) -> Array:
         if isinstance(r, np.ndarray):
