@@ -27,9 +27,11 @@ from ..assembly.system import PARALLEL_BLOCKS, BlockSystem, PenaltyPairs, Spring
 
 __all__ = ["ContactSprings", "INCREMENTAL_BLOCKS", "is_large", "directional_rows"]
 
-# Systems of more blocks add a solve's contact springs as changes to the last solve's sums; the sums
-# then differ from a fresh sum in their last bits, which small models (the paper's) must not.
-INCREMENTAL_BLOCKS = PARALLEL_BLOCKS
+# Systems of more blocks add a solve's contact springs as changes to the last solve's sums (and take the rows'
+# compiled passes); the sums then differ from a fresh sum in their last bits, which the paper's examples (the
+# largest, the sine wave, has 40 blocks) must not. Above it the changes are cheaper: slope_a (74 blocks) and
+# slope_b (273) solve 10-20 % faster (docs/dev/performance-history.md, *Sums by changes from 41 blocks*).
+INCREMENTAL_BLOCKS = 40
 
 
 def is_large(n_blocks: int) -> bool:
