@@ -8,7 +8,9 @@ step's time budget is 1 / (factor × baseline), and a solver that keeps today's 
 
     (budget − cost a step) / cost a solve
 
-solves a step (docs/dev/contact-solve.md, *How few solves a step the acceptance allows*). Measure the baseline
+solves a step (docs/dev/contact-solve.md, *How few solves a step the acceptance allows*). Not the bench's own
+timers (`srdda.apps.bench.runner.Probe`): its phases put work done once a step (the base system, the commit)
+with the solves' assembly and contact test, and a budget needs the two apart. Measure the baseline
 in the same sitting (`srdda bench --json --model M` on the baseline's tree), the machine otherwise idle.
 
     python benchmarks/probe_solve_budget.py slope_c --baseline 5.34 --target 5
@@ -82,14 +84,24 @@ def measure(name: str, contact_solver: ContactSolverName, steps: int | None) -> 
             "solve_ms": 1e3 * per_solve, "step_ms": 1e3 * (wall - per_solve * solves) / attempts}
 
 
+def positive(text: str) -> float:
+    """A command-line number that must be above zero (a rate or a factor)."""
+    value = float(text)
+    if not value > 0.0:
+        raise argparse.ArgumentTypeError(f"must be a number above zero, got {text}")
+    return value
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("model", choices=sorted(CASES))
     parser.add_argument("--contact-solver", default="open-close", choices=get_args(ContactSolverName))
     parser.add_argument("--steps", type=int, default=None, help="default: the bench's steps of the model")
-    parser.add_argument("--baseline", type=float, required=True, help="the baseline's steps a second")
-    parser.add_argument("--target", type=float, required=True, help="the speed-up asked for")
+    parser.add_argument("--baseline", type=positive, required=True, help="the baseline's steps a second")
+    parser.add_argument("--target", type=positive, required=True, help="the speed-up asked for")
     args = parser.parse_args()
+    if args.steps is not None and args.steps < 1:
+        parser.error(f"argument --steps: must be at least 1, got {args.steps}")
     row = measure(args.model, args.contact_solver, args.steps)
     budget = 1e3 / (args.target * args.baseline)
     row.update(budget_ms=budget, solves_allowed=(budget - row["step_ms"]) / row["solve_ms"],
